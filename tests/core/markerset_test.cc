@@ -1,0 +1,75 @@
+#include "core/markerset.h"
+
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+
+namespace csw {
+namespace {
+
+const char* kSet = R"({
+  "name": "demo",
+  "aliases": {"H1": ["HeadFront"]},
+  "head_cluster": ["H1", "H2", "H3"],
+  "face": ["LipU", "LipL"],
+  "throat": [{"marker": "T1", "head_weight": 0.5}, "T2"],
+  "forearm_cluster": ["F1", "F2", "F3"],
+  "hand_segments": [
+    {"name": "palm", "markers": ["P1", "P2", "P3"]},
+    {"name": "index1", "parent": "palm", "markers": ["I1a", "I1b"]}
+  ],
+  "fingertips": ["I1b"],
+  "sticks": [["H1", "H2"]]
+})";
+
+TEST(MarkerSet, ParsesRolesAndRoundTrips) {
+  MarkerSet s = ParseMarkerSet(kSet, "demo.json");
+  EXPECT_EQ(s.name, "demo");
+  ASSERT_EQ(s.throat.size(), 2u);
+  EXPECT_DOUBLE_EQ(*s.throat[0].head_weight, 0.5);
+  EXPECT_FALSE(s.throat[1].head_weight.has_value());
+  EXPECT_EQ(s.hand_segments[1].parent, "palm");
+  EXPECT_EQ(s.AllMarkers().size(), 15u);
+  MarkerSet back = ParseMarkerSet(MarkerSetToJson(s));
+  EXPECT_EQ(back.AllMarkers(), s.AllMarkers());
+  EXPECT_EQ(back.aliases, s.aliases);
+  EXPECT_EQ(back.sticks, s.sticks);
+}
+
+TEST(MarkerSet, BindsThroughAliasesAndSubjectPrefix) {
+  MarkerSet s = ParseMarkerSet(kSet);
+  std::vector<std::string> labels = {"Subj:HeadFront", "h2", "H3", "LipU"};
+  MarkerBinding b = BindMarkerSet(s, labels, false);
+  EXPECT_EQ(b.At("H1"), 0);
+  EXPECT_EQ(b.At("H2"), 1);
+  EXPECT_EQ(b.At("H3"), 2);
+  EXPECT_EQ(b.At("LipU"), 3);
+  EXPECT_EQ(b.missing.size(), 11u);
+  EXPECT_THROW(b.At("LipL"), InvalidInput);
+  try {
+    BindMarkerSet(s, labels, true, "take7");
+    FAIL() << "expected InvalidInput";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("take7"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("LipL"), std::string::npos);
+  }
+}
+
+TEST(MarkerSet, RejectsBrokenDefinitionsWithReasons) {
+  EXPECT_THROW(ParseMarkerSet(R"({"head_cluster": ["a", "b"]})"), InvalidInput);
+  EXPECT_THROW(ParseMarkerSet(R"({"head_cluster": ["a", "a", "b"]})"), InvalidInput);
+  EXPECT_THROW(ParseMarkerSet(R"({"throat": [{"marker": "t", "head_weight": 1.5}]})"), InvalidInput);
+  EXPECT_THROW(ParseMarkerSet(R"({"hand_segments": [{"name": "x", "parent": "nope", "markers": ["a", "b"]}]})"),
+               InvalidInput);
+  EXPECT_THROW(ParseMarkerSet(R"({"colour": "red"})"), InvalidInput);
+  try {
+    ParseMarkerSet("{\n\"name\": \"x\",\n\"face\": [\"a\",]\n}", "bad.json");
+    FAIL() << "expected ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.where().file, "bad.json");
+    EXPECT_EQ(e.where().line.value_or(0), 3);
+  }
+}
+
+}  // namespace
+}  // namespace csw

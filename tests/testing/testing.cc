@@ -1,0 +1,49 @@
+#include "tests/testing/testing.h"
+
+#include <cstdlib>
+#include <random>
+
+namespace csw::testing {
+
+namespace fs = std::filesystem;
+
+fs::path SharedDataDir() {
+  const char* env = std::getenv("CSW_SHARED_DATA");
+  fs::path p = env ? fs::path(env) : fs::path("../shared/data");
+  std::error_code ec;
+  if (fs::is_directory(p, ec)) return fs::canonical(p);
+  return {};
+}
+
+fs::path SharedData(const std::string& relative) {
+  fs::path dir = SharedDataDir();
+  if (dir.empty()) return {};
+  fs::path p = dir / relative;
+  std::error_code ec;
+  return fs::exists(p, ec) ? p : fs::path();
+}
+
+fs::path SourceDir() {
+  const char* env = std::getenv("CSW_SOURCE_DIR");
+  return env ? fs::path(env) : fs::current_path();
+}
+
+TempDir::TempDir() {
+  std::random_device rd;
+  for (int i = 0; i < 100; ++i) {
+    fs::path p = fs::temp_directory_path() / ("csw-test-" + std::to_string(rd()));
+    std::error_code ec;
+    if (fs::create_directory(p, ec)) {
+      path_ = p;
+      return;
+    }
+  }
+  throw std::runtime_error("cannot create a temporary directory");
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  fs::remove_all(path_, ec);
+}
+
+}  // namespace csw::testing
