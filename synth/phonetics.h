@@ -1,0 +1,52 @@
+#pragma once
+// Phonetic front end: French text -> phones with times and audio (libespeak-ng).
+// Shared by the virtual cuer (datasets/) and the synthesizer (synth/).
+#include <string>
+#include <vector>
+
+#include "core/take.h"
+
+namespace csw {
+
+struct Phone {
+  std::string ipa;       // one IPA phoneme, e.g. "a", "ʁ", "ɑ̃", "ɥ"; "" for a pause
+  std::string espeak;    // espeak-ng's own phoneme name, e.g. "a~"
+  double start_s = 0.0;  // position in the audio
+  double end_s = 0.0;
+  int word = -1;         // index into Utterance::words, -1 for pauses
+};
+
+struct Word {
+  std::string text;
+  double start_s = 0.0;
+  double end_s = 0.0;
+};
+
+struct Utterance {
+  std::string text;
+  std::vector<Word> words;
+  std::vector<Phone> phones;  // contiguous, covering [0, audio.duration_s()]
+  Audio audio;                // mono, espeak-ng's sample rate (22050 Hz)
+};
+
+struct PhonetiseOptions {
+  std::string voice = "fr";
+  int rate_wpm = 150;       // espeak-ng words per minute
+  int pitch = 50;           // 0-99
+  bool synthesize_audio = true;
+  std::string Check() const;  // "" when valid, else the reason
+};
+
+// Phonetises and (optionally) synthesises one French utterance. Thread-compatible
+// only: libespeak-ng is global state, so calls are serialised internally.
+// Throws csw::Error when espeak-ng or its French voice is unavailable.
+Utterance Phonetise(const std::string& text, const PhonetiseOptions& options = {});
+
+// words and phones tiers (interval tiers covering the audio) for a TextGrid.
+std::vector<LabelTier> UtteranceTiers(const Utterance& utterance);
+
+// The documented espeak-ng -> IPA mapping table (docs/phonetics.md): returns ""
+// for an unknown name.
+std::string EspeakToIpa(const std::string& espeak_name);
+
+}  // namespace csw
