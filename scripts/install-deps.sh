@@ -7,7 +7,7 @@ pkgs=(
   libeigen3-dev libceres-dev libopencv-dev
   libhdf5-dev hdf5-tools
   libespeak-ng-dev espeak-ng-data libsndfile1-dev sox
-  nlohmann-json3-dev libssl-dev libpugixml-dev
+  nlohmann-json3-dev libssl-dev libpugixml-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   qt6-base-dev qt6-base-dev-tools libqt6svg6-dev qt6-multimedia-dev
   libqcustomplot-dev libqcustomplot2.1-qt6 libgl-dev

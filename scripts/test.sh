@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# The whole test suite, from a fresh Debian 12 machine (run as root so missing
+# packages can be installed):
+#   1. build with warnings as errors and run every test (ctest);
+#   2. build again with AddressSanitizer + UndefinedBehaviorSanitizer and rerun the tests;
+#   3. build the libFuzzer targets with clang and run each for CSW_FUZZ_SECONDS (default 60).
+# Set CSW_TEST_QUICK=1 to run step 1 only.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$(pwd)
+bash scripts/install-deps.sh
+jobs=$(nproc)
+export CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache}
+export CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-5G}
+start=$(date +%s)
+stamp() { echo "== [$(( $(date +%s) - start )) s] $*"; }
+
+stamp "build (warnings as errors)"
+cmake -S . -B build/ci -G Ninja -DCSW_WERROR=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+cmake --build build/ci -j"$jobs"
+stamp "tests"
+(cd build/ci && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 600)
+
+if [ "${CSW_TEST_QUICK:-0}" = 1 ]; then stamp "quick mode: done"; exit 0; fi
+
+stamp "build (ASan + UBSan)"
+cmake -S . -B build/asan -G Ninja -DCSW_WERROR=ON -DCSW_SANITIZE=ON -DCSW_BUILD_BENCH=OFF \
+  -DCMAKE_BUILD_TYPE=Debug >/dev/null
+cmake --build build/asan -j"$jobs"
+stamp "tests under ASan + UBSan"
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+(cd build/asan && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 900)
+
+stamp "build fuzzers (clang, libFuzzer + ASan + UBSan)"
+CC=clang CXX=clang++ cmake -S . -B build/fuzz -G Ninja -DCSW_FUZZ=ON -DCSW_BUILD_TESTS=OFF \
+  -DCSW_BUILD_GUI=OFF -DCSW_BUILD_BENCH=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+cmake --build build/fuzz -j"$jobs" --target csw_fuzzers
+secs=${CSW_FUZZ_SECONDS:-60}
+for f in build/fuzz/fuzz/fuzz_*; do
+  [ -x "$f" ] || continue
+  name=$(basename "$f")
+  seeds="$root/fuzz/seeds/${name#fuzz_}"
+  work="build/fuzz/corpus-${name#fuzz_}"
+  mkdir -p "$work"
+  stamp "fuzz $name for ${secs}s"
+  "$f" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 "$work" \
+    $( [ -d "$seeds" ] && echo "$seeds" ) 2>&1 | tail -n 12
+done
+stamp "all test stages passed"
