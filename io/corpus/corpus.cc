@@ -1,0 +1,1009 @@
+#include "io/corpus/corpus.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <system_error>
+
+#include "core/error.h"
+#include "io/corpus/hdf5_util.h"
+
+#ifndef CSW_VERSION
+#define CSW_VERSION "unknown"
+#endif
+
+namespace csw {
+namespace {
+
+namespace fs = std::filesystem;
+using h5::Handle;
+using h5::Where;
+
+constexpr char kFormatName[] = "csw-corpus";
+// Analog channels are chunked in blocks of about this many bytes.
+constexpr int64_t kAnalogChunkBytes = 256 * 1024;
+// Largest marker array LoadTake agrees to allocate (floats).
+constexpr int64_t kMaxLoadFloats = int64_t{1} << 31;
+
+std::string TakeObject(const std::string& name) { return "/takes/" + name; }
+
+ParseError Damaged(const Where& where, const std::string& what) {
+  return ParseError({where.file, std::nullopt, std::nullopt}, what);
+}
+
+std::string NowUtc() {
+  std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string Errno() { return std::strerror(errno); }
+
+void ValidateTakeName(const std::string& name) {
+  if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos ||
+      name.find('\0') != std::string::npos) {
+    throw InvalidInput("invalid take name '" + name + "': it must be non-empty, not '.' or '..', and contain no '/'");
+  }
+}
+
+// Group name of tier `index`: a zero-padded index (so that name order is tier
+// order) then the tier name with '/' replaced.
+std::string TierGroupName(size_t index, const std::string& name) {
+  char prefix[32];
+  std::snprintf(prefix, sizeof prefix, "%03zu_", index);
+  std::string safe = name;
+  std::replace(safe.begin(), safe.end(), '/', '_');
+  return prefix + safe;
+}
+
+// The leading decimal index of a tier group name, or -1.
+int64_t TierGroupIndex(const std::string& group_name) {
+  int64_t v = 0;
+  size_t i = 0;
+  for (; i < group_name.size() && i < 12 && group_name[i] >= '0' && group_name[i] <= '9'; ++i) {
+    v = v * 10 + (group_name[i] - '0');
+  }
+  return i == 0 ? -1 : v;
+}
+
+void DeleteLinkIfExists(hid_t loc, const std::string& name, const Where& where, const std::string& object) {
+  if (h5::LinkExists(loc, name)) h5::Check(H5Ldelete(loc, name.c_str(), H5P_DEFAULT), where, "cannot delete", object);
+}
+
+Handle FileAccessList(const Where& where) {
+  Handle fapl = h5::Own(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, where, "cannot create file access properties", "");
+  // Objects readable by HDF5 1.8 (older MATLAB releases), with dense storage
+  // for large attributes.
+  h5::Check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18), where,
+            "cannot set file format bounds", "");
+  // Closing the file fails loudly if we leaked an object handle.
+  h5::Check(H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_SEMI), where, "cannot set close degree", "");
+  return fapl;
+}
+
+// Opens an HDF5 file (the corpus or its temporary copy), turning the failure
+// modes into one clear error about `where.file`.
+Handle OpenHdf5(const std::string& file, unsigned flags, const Where& where) {
+  std::error_code ec;
+  if (!fs::exists(file, ec)) throw IoError(where.file, "no such file");
+  if (fs::is_directory(file, ec)) throw IoError(where.file, "is a directory, not a corpus file");
+  if (::access(file.c_str(), R_OK) != 0) throw IoError(where.file, "cannot read: " + Errno());
+  htri_t is_hdf5 = H5Fis_hdf5(file.c_str());
+  if (is_hdf5 == 0) {
+    h5::TakeErrorMessage();
+    throw Damaged(where, "not an HDF5 file (no HDF5 signature), so not a csw corpus");
+  }
+  if (is_hdf5 < 0) throw IoError(where.file, "cannot read as HDF5: " + h5::TakeErrorMessage());
+  Handle fapl = FileAccessList(where);
+  hid_t id = H5Fopen(file.c_str(), flags, fapl.get());
+  if (id < 0) throw Damaged(where, "damaged or truncated HDF5 file: " + h5::TakeErrorMessage());
+  return Handle(id, H5Fclose);
+}
+
+// Checks the root attributes and the shape of every take.
+void ValidateCorpus(hid_t file, const Where& where) {
+  auto format = h5::ReadAttrString(file, "format", where, "/");
+  if (!format) throw Damaged(where, "not a csw corpus: the root group has no 'format' attribute");
+  if (*format != kFormatName) throw Damaged(where, "not a csw corpus: format is '" + *format + "'");
+  auto version = h5::ReadAttrInt(file, "format_version", where, "/");
+  if (!version) throw Damaged(where, "csw corpus without a format_version attribute");
+  if (*version > kCorpusFormatVersion) {
+    throw Damaged(where, "corpus format_version " + std::to_string(*version) +
+                             " is newer than this csw reads (" + std::to_string(kCorpusFormatVersion) +
+                             "); update csw");
+  }
+  if (*version < 1) throw Damaged(where, "invalid corpus format_version " + std::to_string(*version));
+  if (!h5::LinkExists(file, "takes")) throw Damaged(where, "csw corpus without a /takes group");
+  Handle takes = h5::OpenGroup(file, "takes", where, "/takes");
+  for (const std::string& name : h5::LinkNames(takes.get(), where, "/takes")) {
+    const std::string obj = TakeObject(name);
+    const std::string prefix = "take '" + name + "': ";
+    hid_t gid = H5Gopen2(takes.get(), name.c_str(), H5P_DEFAULT);
+    if (gid < 0) throw Damaged(where, prefix + obj + " is not a readable group (" + h5::TakeErrorMessage() + ")");
+    Handle group(gid, H5Gclose);
+    if (!h5::LinkExists(group.get(), "markers")) throw Damaged(where, prefix + obj + "/markers is missing");
+    if (!h5::LinkExists(group.get(), "marker_names")) throw Damaged(where, prefix + obj + "/marker_names is missing");
+    hid_t did = H5Dopen2(group.get(), "markers", H5P_DEFAULT);
+    if (did < 0) throw Damaged(where, prefix + obj + "/markers is not a readable dataset (" + h5::TakeErrorMessage() + ")");
+    Handle markers(did, H5Dclose);
+    std::vector<hsize_t> dims = h5::Shape(markers.get(), where, obj + "/markers");
+    if (dims.size() != 3) {
+      throw Damaged(where, prefix + obj + "/markers has rank " + std::to_string(dims.size()) + ", expected 3");
+    }
+    if (dims[2] != 3) {
+      throw Damaged(where, prefix + obj + "/markers has last dimension " + std::to_string(dims[2]) + ", expected 3");
+    }
+    Handle type = h5::Own(H5Dget_type(markers.get()), H5Tclose, where, "cannot read the type of", obj + "/markers");
+    if (H5Tget_class(type.get()) != H5T_FLOAT) throw Damaged(where, prefix + obj + "/markers is not floating point");
+    hid_t nid = H5Dopen2(group.get(), "marker_names", H5P_DEFAULT);
+    if (nid < 0) throw Damaged(where, prefix + obj + "/marker_names is not a readable dataset");
+    Handle names(nid, H5Dclose);
+    std::vector<hsize_t> ndims = h5::Shape(names.get(), where, obj + "/marker_names");
+    if (ndims.size() != 1 || ndims[0] != dims[1]) {
+      throw Damaged(where, prefix + obj + "/marker_names has " +
+                               (ndims.size() == 1 ? std::to_string(ndims[0]) : std::string("a non-vector of")) +
+                               " names but markers has " + std::to_string(dims[1]) + " markers");
+    }
+  }
+}
+
+// Reads frames [first, first + count) of an open markers dataset into out.
+void ReadMarkerRange(hid_t dataset, int64_t first, int64_t count, int64_t markers, float* out, const Where& where,
+                     const std::string& object) {
+  if (count == 0 || markers == 0) return;
+  Handle fspace = h5::Own(H5Dget_space(dataset), H5Sclose, where, "cannot read", object);
+  hsize_t start[3] = {static_cast<hsize_t>(first), 0, 0};
+  hsize_t cnt[3] = {static_cast<hsize_t>(count), static_cast<hsize_t>(markers), 3};
+  h5::Check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, cnt, nullptr), where, "cannot select",
+            object);
+  Handle mspace = h5::Own(H5Screate_simple(3, cnt, nullptr), H5Sclose, where, "cannot read", object);
+  h5::Check(H5Dread(dataset, H5T_NATIVE_FLOAT, mspace.get(), fspace.get(), H5P_DEFAULT, out), where, "cannot read",
+            object);
+}
+
+// Reads a whole 2-D float dataset; returns rows and fills cols.
+std::vector<float> ReadFloat2D(hid_t loc, const std::string& name, int64_t* rows, int64_t* cols, const Where& where,
+                               const std::string& object) {
+  Handle ds = h5::OpenDataset(loc, name, where, object);
+  std::vector<hsize_t> dims = h5::Shape(ds.get(), where, object);
+  if (dims.size() != 2) throw Damaged(where, object + " has rank " + std::to_string(dims.size()) + ", expected 2");
+  if (dims[1] > 0 && dims[0] > static_cast<hsize_t>(kMaxLoadFloats) / dims[1]) {
+    throw Damaged(where, object + " is implausibly large");
+  }
+  *rows = static_cast<int64_t>(dims[0]);
+  *cols = static_cast<int64_t>(dims[1]);
+  std::vector<float> out(dims[0] * dims[1]);
+  if (!out.empty()) {
+    h5::Check(H5Dread(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()), where, "cannot read",
+              object);
+  }
+  return out;
+}
+
+// Creates an extendible 2-D float dataset [0][cols] chunked by rows, shuffle + deflate.
+Handle CreateExtendible2D(hid_t loc, const std::string& name, int64_t cols, int64_t chunk_rows, const Where& where,
+                          const std::string& object) {
+  hsize_t dims[2] = {0, static_cast<hsize_t>(cols)};
+  hsize_t maxdims[2] = {H5S_UNLIMITED, static_cast<hsize_t>(cols)};
+  hsize_t chunk[2] = {static_cast<hsize_t>(std::max<int64_t>(1, chunk_rows)),
+                      static_cast<hsize_t>(std::max<int64_t>(1, cols))};
+  Handle space = h5::Own(H5Screate_simple(2, dims, maxdims), H5Sclose, where, "cannot create", object);
+  Handle dcpl = h5::Own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, where, "cannot create", object);
+  h5::Check(H5Pset_chunk(dcpl.get(), 2, chunk), where, "cannot chunk", object);
+  h5::Check(H5Pset_shuffle(dcpl.get()), where, "cannot set the shuffle filter of", object);
+  h5::Check(H5Pset_deflate(dcpl.get(), kCorpusDeflateLevel), where, "cannot set the deflate filter of", object);
+  return h5::Own(H5Dcreate2(loc, name.c_str(), H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                 H5Dclose, where, "cannot create", object);
+}
+
+// Appends rows × cols floats at the end of an extendible 2-D dataset.
+void Append2D(hid_t dataset, int64_t old_rows, int64_t rows, int64_t cols, const float* data, const Where& where,
+              const std::string& object) {
+  if (rows == 0) return;
+  hsize_t new_dims[2] = {static_cast<hsize_t>(old_rows + rows), static_cast<hsize_t>(cols)};
+  h5::Check(H5Dset_extent(dataset, new_dims), where, "cannot extend", object);
+  if (cols == 0) return;
+  Handle fspace = h5::Own(H5Dget_space(dataset), H5Sclose, where, "cannot write", object);
+  hsize_t start[2] = {static_cast<hsize_t>(old_rows), 0};
+  hsize_t cnt[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(cols)};
+  h5::Check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, cnt, nullptr), where, "cannot select",
+            object);
+  Handle mspace = h5::Own(H5Screate_simple(2, cnt, nullptr), H5Sclose, where, "cannot write", object);
+  h5::Check(H5Dwrite(dataset, H5T_NATIVE_FLOAT, mspace.get(), fspace.get(), H5P_DEFAULT, data), where,
+            "cannot write", object);
+}
+
+std::vector<std::string> PadTo(std::vector<std::string> v, size_t n) {
+  v.resize(n);
+  return v;
+}
+
+void WriteEvents(hid_t take_group, const std::vector<Event>& events, const Where& where, const std::string& obj) {
+  const std::string eobj = obj + "/events";
+  Handle g = h5::CreateGroup(take_group, "events", where, eobj);
+  std::vector<std::string> label, context, description;
+  std::vector<double> time_s;
+  for (const Event& e : events) {
+    label.push_back(e.label);
+    context.push_back(e.context);
+    description.push_back(e.description);
+    time_s.push_back(e.time_s);
+  }
+  h5::WriteStrings(g.get(), "label", label, where, eobj + "/label");
+  h5::WriteStrings(g.get(), "context", context, where, eobj + "/context");
+  h5::WriteDoubles(g.get(), "time_s", time_s, where, eobj + "/time_s");
+  h5::WriteStrings(g.get(), "description", description, where, eobj + "/description");
+}
+
+void WriteTierGroups(hid_t take_group, const std::vector<LabelTier>& tiers, const Where& where,
+                     const std::string& obj) {
+  const std::string tobj = obj + "/tiers";
+  DeleteLinkIfExists(take_group, "tiers", where, tobj);
+  Handle g = h5::CreateGroup(take_group, "tiers", where, tobj);
+  for (size_t i = 0; i < tiers.size(); ++i) {
+    const LabelTier& tier = tiers[i];
+    const std::string gname = TierGroupName(i, tier.name);
+    const std::string o = tobj + "/" + gname;
+    Handle tg = h5::CreateGroup(g.get(), gname, where, o);
+    h5::WriteAttr(tg.get(), "name", tier.name, where, o);
+    h5::WriteAttr(tg.get(), "kind", std::string(tier.kind == LabelTier::Kind::kPoint ? "point" : "interval"), where,
+                  o);
+    h5::WriteAttr(tg.get(), "start_s", tier.start_s, where, o);
+    h5::WriteAttr(tg.get(), "end_s", tier.end_s, where, o);
+    std::vector<double> start, end;
+    std::vector<std::string> text;
+    for (const Label& l : tier.labels) {
+      start.push_back(l.start_s);
+      end.push_back(l.end_s);
+      text.push_back(l.text);
+    }
+    h5::WriteDoubles(tg.get(), "start_s", start, where, o + "/start_s");
+    h5::WriteDoubles(tg.get(), "end_s", end, where, o + "/end_s");
+    h5::WriteStrings(tg.get(), "text", text, where, o + "/text");
+  }
+}
+
+void CheckAudio(const Audio& audio) {
+  if (audio.samples.empty()) return;
+  if (audio.channels < 1) throw InvalidInput("audio has " + std::to_string(audio.channels) + " channels");
+  if (audio.samples.size() % static_cast<size_t>(audio.channels) != 0) {
+    throw InvalidInput("audio sample count " + std::to_string(audio.samples.size()) + " is not a multiple of " +
+                       std::to_string(audio.channels) + " channels");
+  }
+}
+
+void WriteAudioGroup(hid_t take_group, const Audio& audio, const std::string& source_path, const Where& where,
+                     const std::string& obj) {
+  const std::string aobj = obj + "/audio";
+  DeleteLinkIfExists(take_group, "audio", where, aobj);
+  if (audio.samples.empty() && source_path.empty()) return;
+  Handle g = h5::CreateGroup(take_group, "audio", where, aobj);
+  h5::WriteAttr(g.get(), "source_path", source_path, where, aobj);
+  if (audio.samples.empty()) return;
+  const std::string sobj = aobj + "/samples";
+  hsize_t dims[2] = {static_cast<hsize_t>(audio.frames()), static_cast<hsize_t>(audio.channels)};
+  Handle space = h5::Own(H5Screate_simple(2, dims, nullptr), H5Sclose, where, "cannot create", sobj);
+  Handle ds = h5::Own(
+      H5Dcreate2(g.get(), "samples", H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+      where, "cannot create", sobj);
+  h5::Check(H5Dwrite(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, audio.samples.data()), where,
+            "cannot write", sobj);
+  h5::WriteAttr(ds.get(), "rate_hz", audio.rate_hz, where, sobj);
+}
+
+void WriteProvenance(hid_t take_group, const Provenance& p, const std::string& csw_version,
+                     const std::string& imported_utc, const Where& where, const std::string& obj) {
+  const std::string pobj = obj + "/provenance";
+  Handle g = h5::CreateGroup(take_group, "provenance", where, pobj);
+  h5::WriteAttr(g.get(), "warnings", p.warnings, where, pobj);
+  h5::WriteAttr(g.get(), "csw_version", csw_version, where, pobj);
+  h5::WriteAttr(g.get(), "imported_utc", imported_utc, where, pobj);
+  const std::string sobj = pobj + "/sources";
+  Handle s = h5::CreateGroup(g.get(), "sources", where, sobj);
+  std::vector<std::string> path, sha256, format;
+  for (const SourceFile& f : p.sources) {
+    path.push_back(f.path);
+    sha256.push_back(f.sha256);
+    format.push_back(f.format);
+  }
+  h5::WriteStrings(s.get(), "path", path, where, sobj + "/path");
+  h5::WriteStrings(s.get(), "sha256", sha256, where, sobj + "/sha256");
+  h5::WriteStrings(s.get(), "format", format, where, sobj + "/format");
+}
+
+std::vector<LabelTier> ReadTiers(hid_t take_group, const Where& where, const std::string& obj) {
+  std::vector<LabelTier> tiers;
+  if (!h5::LinkExists(take_group, "tiers")) return tiers;
+  const std::string tobj = obj + "/tiers";
+  Handle g = h5::OpenGroup(take_group, "tiers", where, tobj);
+  std::vector<std::string> names = h5::LinkNames(g.get(), where, tobj);
+  std::stable_sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+    return TierGroupIndex(a) < TierGroupIndex(b);
+  });
+  for (const std::string& gname : names) {
+    const std::string o = tobj + "/" + gname;
+    Handle tg = h5::OpenGroup(g.get(), gname, where, o);
+    LabelTier tier;
+    tier.name = h5::ReadAttrString(tg.get(), "name", where, o).value_or(gname);
+    std::string kind = h5::ReadAttrString(tg.get(), "kind", where, o).value_or("interval");
+    if (kind == "interval") {
+      tier.kind = LabelTier::Kind::kInterval;
+    } else if (kind == "point") {
+      tier.kind = LabelTier::Kind::kPoint;
+    } else {
+      throw Damaged(where, o + ": unknown tier kind '" + kind + "' (expected interval or point)");
+    }
+    tier.start_s = h5::ReadAttrDouble(tg.get(), "start_s", where, o).value_or(0.0);
+    tier.end_s = h5::ReadAttrDouble(tg.get(), "end_s", where, o).value_or(0.0);
+    std::vector<double> start = h5::ReadDoubles(tg.get(), "start_s", where, o + "/start_s");
+    std::vector<double> end = h5::ReadDoubles(tg.get(), "end_s", where, o + "/end_s");
+    std::vector<std::string> text = h5::ReadStrings(tg.get(), "text", where, o + "/text");
+    if (start.size() != end.size() || start.size() != text.size()) {
+      throw Damaged(where, o + ": start_s, end_s and text have different lengths (" + std::to_string(start.size()) +
+                               ", " + std::to_string(end.size()) + ", " + std::to_string(text.size()) + ")");
+    }
+    for (size_t i = 0; i < start.size(); ++i) tier.labels.push_back({start[i], end[i], std::move(text[i])});
+    tiers.push_back(std::move(tier));
+  }
+  return tiers;
+}
+
+struct MarkerShape {
+  int64_t frames = 0;
+  int64_t markers = 0;
+};
+
+MarkerShape ShapeOfMarkers(hid_t markers, const Where& where, const std::string& object) {
+  std::vector<hsize_t> dims = h5::Shape(markers, where, object);
+  if (dims.size() != 3 || dims[2] != 3) throw Damaged(where, object + " is not a [frames][markers][3] array");
+  return {static_cast<int64_t>(dims[0]), static_cast<int64_t>(dims[1])};
+}
+
+Handle OpenTakeGroup(hid_t file, const std::string& name, const Where& where) {
+  if (name.empty() || name.find('/') != std::string::npos) throw InvalidInput("no take named '" + name + "'");
+  Handle takes = h5::OpenGroup(file, "takes", where, "/takes");
+  if (!h5::LinkExists(takes.get(), name)) throw InvalidInput(where.file + ": no take named '" + name + "'");
+  return h5::OpenGroup(takes.get(), name, where, TakeObject(name));
+}
+
+TakeSummary SummarizeTake(hid_t file, const std::string& name, const Where& where) {
+  const std::string obj = TakeObject(name);
+  Handle g = OpenTakeGroup(file, name, where);
+  TakeSummary s;
+  s.name = name;
+  s.rate_hz = h5::ReadAttrDouble(g.get(), "rate_hz", where, obj).value_or(0.0);
+  Handle markers = h5::OpenDataset(g.get(), "markers", where, obj + "/markers");
+  MarkerShape shape = ShapeOfMarkers(markers.get(), where, obj + "/markers");
+  s.frames = shape.frames;
+  s.markers = shape.markers;
+  s.duration_s = s.rate_hz > 0 ? static_cast<double>(s.frames) / s.rate_hz : 0.0;
+  if (auto gaps = h5::ReadAttrInt(markers.get(), "gaps", where, obj + "/markers")) {
+    s.gaps = *gaps;
+  } else {
+    // Written by another tool: count the gaps by streaming the markers.
+    constexpr int64_t kWindow = 4096;
+    std::vector<uint8_t> in_gap(static_cast<size_t>(shape.markers), 0);
+    std::vector<float> buf;
+    for (int64_t f0 = 0; f0 < shape.frames; f0 += kWindow) {
+      int64_t n = std::min(kWindow, shape.frames - f0);
+      buf.resize(static_cast<size_t>(n * shape.markers * 3));
+      ReadMarkerRange(markers.get(), f0, n, shape.markers, buf.data(), where, obj + "/markers");
+      for (int64_t f = 0; f < n; ++f) {
+        for (int64_t m = 0; m < shape.markers; ++m) {
+          bool missing = std::isnan(buf[static_cast<size_t>((f * shape.markers + m) * 3)]);
+          if (missing && !in_gap[static_cast<size_t>(m)]) ++s.gaps;
+          in_gap[static_cast<size_t>(m)] = missing;
+        }
+      }
+    }
+  }
+  for (const LabelTier& t : ReadTiers(g.get(), where, obj)) s.tier_names.push_back(t.name);
+  if (h5::LinkExists(g.get(), "audio")) {
+    Handle a = h5::OpenGroup(g.get(), "audio", where, obj + "/audio");
+    if (h5::LinkExists(a.get(), "samples")) {
+      Handle ds = h5::OpenDataset(a.get(), "samples", where, obj + "/audio/samples");
+      std::vector<hsize_t> dims = h5::Shape(ds.get(), where, obj + "/audio/samples");
+      s.has_audio = !dims.empty() && dims[0] > 0;
+    }
+  }
+  if (h5::LinkExists(g.get(), "analog")) {
+    Handle a = h5::OpenGroup(g.get(), "analog", where, obj + "/analog");
+    if (h5::LinkExists(a.get(), "data")) {
+      Handle ds = h5::OpenDataset(a.get(), "data", where, obj + "/analog/data");
+      std::vector<hsize_t> dims = h5::Shape(ds.get(), where, obj + "/analog/data");
+      s.analog_channels = dims.size() == 2 ? static_cast<int64_t>(dims[1]) : 0;
+    }
+  }
+  return s;
+}
+
+Take ReadTake(hid_t file, const std::string& name, const Where& where) {
+  const std::string obj = TakeObject(name);
+  Handle g = OpenTakeGroup(file, name, where);
+  Take t;
+  t.name = name;
+  t.rate_hz = h5::ReadAttrDouble(g.get(), "rate_hz", where, obj).value_or(0.0);
+  t.first_frame = h5::ReadAttrInt(g.get(), "first_frame", where, obj).value_or(1);
+  t.source_units = h5::ReadAttrString(g.get(), "source_units", where, obj).value_or("mm");
+  t.marker_names = h5::ReadStrings(g.get(), "marker_names", where, obj + "/marker_names");
+  {
+    Handle markers = h5::OpenDataset(g.get(), "markers", where, obj + "/markers");
+    MarkerShape shape = ShapeOfMarkers(markers.get(), where, obj + "/markers");
+    if (shape.markers != static_cast<int64_t>(t.marker_names.size())) {
+      throw Damaged(where, "take '" + name + "': marker_names has " + std::to_string(t.marker_names.size()) +
+                               " names but markers has " + std::to_string(shape.markers) + " markers");
+    }
+    if (shape.markers > 0 && shape.frames > kMaxLoadFloats / (shape.markers * 3)) {
+      throw Damaged(where, "take '" + name + "': markers is too large to load at once; use LoadMarkers");
+    }
+    t.markers.Resize(shape.frames, shape.markers);
+    ReadMarkerRange(markers.get(), 0, shape.frames, shape.markers, t.markers.data().data(), where, obj + "/markers");
+  }
+  if (h5::LinkExists(g.get(), "analog")) {
+    const std::string aobj = obj + "/analog";
+    Handle a = h5::OpenGroup(g.get(), "analog", where, aobj);
+    t.analog.names = h5::ReadStrings(a.get(), "names", where, aobj + "/names");
+    if (h5::LinkExists(a.get(), "units")) t.analog.units = h5::ReadStrings(a.get(), "units", where, aobj + "/units");
+    if (h5::LinkExists(a.get(), "descriptions")) {
+      t.analog.descriptions = h5::ReadStrings(a.get(), "descriptions", where, aobj + "/descriptions");
+    }
+    if (h5::LinkExists(a.get(), "data")) {
+      int64_t cols = 0;
+      t.analog.data = ReadFloat2D(a.get(), "data", &t.analog.samples, &cols, where, aobj + "/data");
+      if (cols != t.analog.channels()) {
+        throw Damaged(where, aobj + "/data has " + std::to_string(cols) + " channels but names has " +
+                                 std::to_string(t.analog.channels()));
+      }
+      Handle ds = h5::OpenDataset(a.get(), "data", where, aobj + "/data");
+      t.analog.rate_hz = h5::ReadAttrDouble(ds.get(), "rate_hz", where, aobj + "/data").value_or(0.0);
+    }
+  }
+  if (h5::LinkExists(g.get(), "events")) {
+    const std::string eobj = obj + "/events";
+    Handle e = h5::OpenGroup(g.get(), "events", where, eobj);
+    std::vector<std::string> label = h5::ReadStrings(e.get(), "label", where, eobj + "/label");
+    std::vector<std::string> context = h5::ReadStrings(e.get(), "context", where, eobj + "/context");
+    std::vector<double> time_s = h5::ReadDoubles(e.get(), "time_s", where, eobj + "/time_s");
+    std::vector<std::string> description = h5::ReadStrings(e.get(), "description", where, eobj + "/description");
+    if (context.size() != label.size() || time_s.size() != label.size() || description.size() != label.size()) {
+      throw Damaged(where, eobj + ": label, context, time_s and description have different lengths");
+    }
+    for (size_t i = 0; i < label.size(); ++i) {
+      t.events.push_back({std::move(label[i]), std::move(context[i]), time_s[i], std::move(description[i])});
+    }
+  }
+  t.tiers = ReadTiers(g.get(), where, obj);
+  if (h5::LinkExists(g.get(), "audio")) {
+    const std::string aobj = obj + "/audio";
+    Handle a = h5::OpenGroup(g.get(), "audio", where, aobj);
+    t.audio_path = h5::ReadAttrString(a.get(), "source_path", where, aobj).value_or("");
+    if (h5::LinkExists(a.get(), "samples")) {
+      int64_t frames = 0;
+      int64_t channels = 0;
+      t.audio.samples = ReadFloat2D(a.get(), "samples", &frames, &channels, where, aobj + "/samples");
+      t.audio.channels = static_cast<int>(channels);
+      Handle ds = h5::OpenDataset(a.get(), "samples", where, aobj + "/samples");
+      t.audio.rate_hz = h5::ReadAttrDouble(ds.get(), "rate_hz", where, aobj + "/samples").value_or(0.0);
+    }
+  }
+  t.provenance.csw_version = h5::ReadAttrString(g.get(), "csw_version", where, obj).value_or("");
+  t.provenance.imported_utc = h5::ReadAttrString(g.get(), "imported_utc", where, obj).value_or("");
+  if (h5::LinkExists(g.get(), "provenance")) {
+    const std::string pobj = obj + "/provenance";
+    Handle p = h5::OpenGroup(g.get(), "provenance", where, pobj);
+    t.provenance.warnings = h5::ReadAttrStrings(p.get(), "warnings", where, pobj);
+    if (h5::LinkExists(p.get(), "sources")) {
+      const std::string sobj = pobj + "/sources";
+      Handle s = h5::OpenGroup(p.get(), "sources", where, sobj);
+      std::vector<std::string> path = h5::ReadStrings(s.get(), "path", where, sobj + "/path");
+      std::vector<std::string> sha = h5::ReadStrings(s.get(), "sha256", where, sobj + "/sha256");
+      std::vector<std::string> format = h5::ReadStrings(s.get(), "format", where, sobj + "/format");
+      if (sha.size() != path.size() || format.size() != path.size()) {
+        throw Damaged(where, sobj + ": path, sha256 and format have different lengths");
+      }
+      for (size_t i = 0; i < path.size(); ++i) {
+        t.provenance.sources.push_back({std::move(path[i]), std::move(sha[i]), std::move(format[i])});
+      }
+    }
+  }
+  return t;
+}
+
+void WriteRootAttributes(hid_t file, const Where& where) {
+  h5::WriteAttr(file, "format", std::string(kFormatName), where, "/");
+  h5::WriteAttr(file, "format_version", int64_t{kCorpusFormatVersion}, where, "/");
+  h5::WriteAttr(file, "csw_version", std::string(CSW_VERSION), where, "/");
+}
+
+Handle CreateCorpusFile(const std::string& file, const Where& where) {
+  Handle fapl = FileAccessList(where);
+  Handle f = h5::Own(H5Fcreate(file.c_str(), H5F_ACC_EXCL, H5P_DEFAULT, fapl.get()), H5Fclose, where,
+                     "cannot create the temporary corpus file", file);
+  WriteRootAttributes(f.get(), where);
+  return f;
+}
+
+void FsyncPath(const std::string& p, bool directory, const std::string& corpus) {
+  int fd = ::open(p.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
+  if (fd < 0) throw IoError(corpus, "cannot open " + p + " to sync it: " + Errno());
+  int r = ::fsync(fd);
+  int saved = errno;
+  ::close(fd);
+  if (r != 0 && !(directory && (saved == EINVAL || saved == EROFS))) {
+    errno = saved;
+    throw IoError(corpus, "cannot sync " + p + ": " + Errno());
+  }
+}
+
+std::string LockPath(const std::string& corpus_path) {
+  fs::path p(corpus_path);
+  return (p.parent_path() / ("." + p.filename().string() + ".csw-lock")).string();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Corpus
+
+struct Corpus::Impl {
+  std::string path;
+  Where where;
+  Handle file;
+};
+
+Corpus Corpus::Open(const std::string& path) {
+  auto lock = h5::Lock();
+  auto impl = std::make_shared<Impl>();
+  impl->path = path;
+  impl->where = {path};
+  impl->file = OpenHdf5(path, H5F_ACC_RDONLY, impl->where);
+  ValidateCorpus(impl->file.get(), impl->where);
+  return Corpus(std::move(impl));
+}
+
+std::vector<TakeSummary> Corpus::Takes() const {
+  auto lock = h5::Lock();
+  Handle takes = h5::OpenGroup(impl_->file.get(), "takes", impl_->where, "/takes");
+  std::vector<TakeSummary> out;
+  for (const std::string& name : h5::LinkNames(takes.get(), impl_->where, "/takes")) {
+    out.push_back(SummarizeTake(impl_->file.get(), name, impl_->where));
+  }
+  return out;
+}
+
+TakeSummary Corpus::Summary(const std::string& take) const {
+  auto lock = h5::Lock();
+  return SummarizeTake(impl_->file.get(), take, impl_->where);
+}
+
+bool Corpus::HasTake(const std::string& name) const {
+  if (name.empty() || name.find('/') != std::string::npos) return false;
+  auto lock = h5::Lock();
+  Handle takes = h5::OpenGroup(impl_->file.get(), "takes", impl_->where, "/takes");
+  return h5::LinkExists(takes.get(), name);
+}
+
+Take Corpus::LoadTake(const std::string& name) const {
+  auto lock = h5::Lock();
+  return ReadTake(impl_->file.get(), name, impl_->where);
+}
+
+MarkerArray Corpus::LoadMarkers(const std::string& take, int64_t first, int64_t count) const {
+  auto lock = h5::Lock();
+  const std::string obj = TakeObject(take) + "/markers";
+  Handle g = OpenTakeGroup(impl_->file.get(), take, impl_->where);
+  Handle markers = h5::OpenDataset(g.get(), "markers", impl_->where, obj);
+  MarkerShape shape = ShapeOfMarkers(markers.get(), impl_->where, obj);
+  if (first < 0 || count < 0 || first > shape.frames || count > shape.frames - first) {
+    throw InvalidInput(impl_->path + ": frames [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                       ") are outside take '" + take + "' (" + std::to_string(shape.frames) + " frames)");
+  }
+  MarkerArray out(count, shape.markers);
+  ReadMarkerRange(markers.get(), first, count, shape.markers, out.data().data(), impl_->where, obj);
+  return out;
+}
+
+std::string Corpus::path() const { return impl_->path; }
+
+// ---------------------------------------------------------------------------
+// CorpusTransaction
+
+struct CorpusTransaction::Impl {
+  std::string path;
+  std::string temp;
+  Where where;
+  int lock_fd = -1;
+  bool temp_created = false;
+  Handle file;
+  int open_writers = 0;
+  bool committed = false;
+  bool freed_space = false;  // something was deleted: compact on commit
+
+  ~Impl() {
+    if (!committed) {
+      auto lock = h5::Lock();
+      file.Reset();
+      if (temp_created) ::unlink(temp.c_str());
+    }
+    if (lock_fd >= 0) ::close(lock_fd);  // releases the flock
+  }
+
+  void CheckUsable() const {
+    if (committed) throw Error(path + ": the transaction was already committed");
+  }
+
+  Handle Takes() { return h5::OpenGroup(file.get(), "takes", where, "/takes"); }
+
+  // Rewrites the temporary file object by object so that the space of deleted
+  // takes is not carried along forever.
+  void Compact();
+};
+
+void CorpusTransaction::Impl::Compact() {
+  const std::string compact = temp + ".compact";
+  ::unlink(compact.c_str());
+  {
+    Handle dst = CreateCorpusFile(compact, where);
+    for (const std::string& name : h5::LinkNames(file.get(), where, "/")) {
+      h5::Check(H5Ocopy(file.get(), name.c_str(), dst.get(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT), where,
+                "cannot copy", "/" + name);
+    }
+    if (!dst.Reset()) {
+      ::unlink(compact.c_str());
+      throw IoError(path, "cannot close " + compact + ": " + h5::TakeErrorMessage());
+    }
+  }
+  if (!file.Reset()) throw IoError(path, "cannot close " + temp + ": " + h5::TakeErrorMessage());
+  if (::rename(compact.c_str(), temp.c_str()) != 0) throw IoError(path, "cannot rename " + compact + ": " + Errno());
+}
+
+std::string CorpusTransaction::TempPath(const std::string& corpus_path) {
+  fs::path p(corpus_path);
+  return (p.parent_path() / ("." + p.filename().string() + ".csw-tmp")).string();
+}
+
+CorpusTransaction::CorpusTransaction(const std::string& path) : impl_(std::make_unique<Impl>()) {
+  auto lock = h5::Lock();
+  Impl& t = *impl_;
+  t.path = path;
+  t.where = {path};
+  t.temp = TempPath(path);
+  const std::string lock_path = LockPath(path);
+  t.lock_fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (t.lock_fd < 0) throw IoError(path, "cannot create the lock file " + lock_path + ": " + Errno());
+  if (::flock(t.lock_fd, LOCK_EX | LOCK_NB) != 0) {
+    if (errno == EWOULDBLOCK) throw IoError(path, "another process is writing this corpus (" + lock_path + " is locked)");
+    throw IoError(path, "cannot lock " + lock_path + ": " + Errno());
+  }
+  // We hold the lock: a temporary file left here belongs to a killed writer.
+  std::error_code ec;
+  fs::remove(t.temp, ec);
+  fs::remove(t.temp + ".compact", ec);
+  if (fs::exists(path, ec)) {
+    Corpus::Open(path);  // refuse to overwrite anything that is not a valid corpus
+    t.temp_created = true;
+    fs::copy_file(path, t.temp, fs::copy_options::overwrite_existing, ec);
+    if (ec) throw IoError(path, "cannot copy to " + t.temp + ": " + ec.message());
+    t.file = OpenHdf5(t.temp, H5F_ACC_RDWR, t.where);
+    h5::WriteAttr(t.file.get(), "csw_version", std::string(CSW_VERSION), t.where, "/");
+  } else {
+    t.temp_created = true;
+    t.file = CreateCorpusFile(t.temp, t.where);
+  }
+  for (const char* g : {"takes", "models", "dictionaries"}) {
+    if (!h5::LinkExists(t.file.get(), g)) h5::CreateGroup(t.file.get(), g, t.where, std::string("/") + g);
+  }
+}
+
+CorpusTransaction::~CorpusTransaction() = default;
+
+const std::string& CorpusTransaction::path() const { return impl_->path; }
+
+bool CorpusTransaction::HasTake(const std::string& name) const {
+  if (name.empty() || name.find('/') != std::string::npos) return false;
+  auto lock = h5::Lock();
+  impl_->CheckUsable();
+  Handle takes = impl_->Takes();
+  return h5::LinkExists(takes.get(), name);
+}
+
+std::vector<std::string> CorpusTransaction::TakeNames() const {
+  auto lock = h5::Lock();
+  impl_->CheckUsable();
+  Handle takes = impl_->Takes();
+  return h5::LinkNames(takes.get(), impl_->where, "/takes");
+}
+
+void CorpusTransaction::RemoveTake(const std::string& name) {
+  auto lock = h5::Lock();
+  impl_->CheckUsable();
+  Handle takes = impl_->Takes();
+  if (name.empty() || name.find('/') != std::string::npos || !h5::LinkExists(takes.get(), name)) {
+    throw InvalidInput(impl_->path + ": no take named '" + name + "'");
+  }
+  h5::Check(H5Ldelete(takes.get(), name.c_str(), H5P_DEFAULT), impl_->where, "cannot delete", TakeObject(name));
+  impl_->freed_space = true;
+}
+
+void CorpusTransaction::WriteTiers(const std::string& take, const std::vector<LabelTier>& tiers) {
+  auto lock = h5::Lock();
+  impl_->CheckUsable();
+  Handle g = OpenTakeGroup(impl_->file.get(), take, impl_->where);
+  WriteTierGroups(g.get(), tiers, impl_->where, TakeObject(take));
+  impl_->freed_space = true;
+}
+
+void CorpusTransaction::WriteAudio(const std::string& take, const Audio& audio, const std::string& source_path) {
+  CheckAudio(audio);
+  auto lock = h5::Lock();
+  impl_->CheckUsable();
+  Handle g = OpenTakeGroup(impl_->file.get(), take, impl_->where);
+  WriteAudioGroup(g.get(), audio, source_path, impl_->where, TakeObject(take));
+  impl_->freed_space = true;
+}
+
+void CorpusTransaction::Commit() {
+  auto lock = h5::Lock();
+  Impl& t = *impl_;
+  t.CheckUsable();
+  if (t.open_writers > 0) throw Error(t.path + ": cannot commit while a take is still being written (call Finish)");
+  h5::Check(H5Fflush(t.file.get(), H5F_SCOPE_GLOBAL), t.where, "cannot flush", t.temp);
+  if (t.freed_space) {
+    t.Compact();
+  } else if (!t.file.Reset()) {
+    throw IoError(t.path, "cannot close " + t.temp + ": " + h5::TakeErrorMessage());
+  }
+  FsyncPath(t.temp, false, t.path);
+  if (::rename(t.temp.c_str(), t.path.c_str()) != 0) {
+    throw IoError(t.path, "cannot rename " + t.temp + " over the corpus: " + Errno());
+  }
+  t.committed = true;
+  fs::path dir = fs::path(t.path).parent_path();
+  FsyncPath(dir.empty() ? std::string(".") : dir.string(), true, t.path);
+}
+
+// ---------------------------------------------------------------------------
+// TakeWriter
+
+struct CorpusTransaction::TakeWriter::Impl {
+  CorpusTransaction::Impl* tx = nullptr;
+  std::string name;
+  std::string object;
+  Handle group;
+  Handle markers;
+  Handle analog;
+  int64_t marker_count = 0;
+  int64_t analog_channels = 0;
+  int64_t analog_samples = 0;
+  int64_t chunk_frames = kCorpusChunkFrames;
+  std::vector<float> buffer;  // up to chunk_frames frames not yet written
+  int64_t buffered = 0;
+  int64_t flushed = 0;
+  std::vector<uint8_t> in_gap;
+  int64_t gaps = 0;
+  bool finished = false;
+
+  void CheckOpen() const {
+    if (finished) throw Error(tx->path + ": take '" + name + "' was already finished");
+    tx->CheckUsable();
+  }
+
+  void WriteBlock(const float* data, int64_t frames) {
+    const std::string obj = object + "/markers";
+    hsize_t dims[3] = {static_cast<hsize_t>(flushed + frames), static_cast<hsize_t>(marker_count), 3};
+    h5::Check(H5Dset_extent(markers.get(), dims), tx->where, "cannot extend", obj);
+    if (marker_count > 0) {
+      Handle fspace = h5::Own(H5Dget_space(markers.get()), H5Sclose, tx->where, "cannot write", obj);
+      hsize_t start[3] = {static_cast<hsize_t>(flushed), 0, 0};
+      hsize_t cnt[3] = {static_cast<hsize_t>(frames), static_cast<hsize_t>(marker_count), 3};
+      h5::Check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, cnt, nullptr), tx->where,
+                "cannot select", obj);
+      Handle mspace = h5::Own(H5Screate_simple(3, cnt, nullptr), H5Sclose, tx->where, "cannot write", obj);
+      h5::Check(H5Dwrite(markers.get(), H5T_NATIVE_FLOAT, mspace.get(), fspace.get(), H5P_DEFAULT, data), tx->where,
+                "cannot write", obj);
+    }
+    flushed += frames;
+  }
+};
+
+CorpusTransaction::TakeWriter::TakeWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+CorpusTransaction::TakeWriter::TakeWriter(TakeWriter&&) noexcept = default;
+CorpusTransaction::TakeWriter& CorpusTransaction::TakeWriter::operator=(TakeWriter&&) noexcept = default;
+
+CorpusTransaction::TakeWriter::~TakeWriter() {
+  if (!impl_ || impl_->finished) return;
+  auto lock = h5::Lock();
+  Impl& w = *impl_;
+  w.analog.Reset();
+  w.markers.Reset();
+  w.group.Reset();
+  --w.tx->open_writers;
+  if (!w.tx->committed && w.tx->file.valid()) {
+    // Remove the partial take so the transaction never commits half a take.
+    hid_t takes = H5Gopen2(w.tx->file.get(), "takes", H5P_DEFAULT);
+    if (takes >= 0) {
+      H5Ldelete(takes, w.name.c_str(), H5P_DEFAULT);
+      H5Gclose(takes);
+    }
+    H5Eclear2(H5E_DEFAULT);
+    w.tx->freed_space = true;
+  }
+}
+
+int64_t CorpusTransaction::TakeWriter::frames_written() const { return impl_->flushed + impl_->buffered; }
+
+void CorpusTransaction::TakeWriter::AppendFrames(const float* xyz_mm, int64_t frames) {
+  auto lock = h5::Lock();
+  Impl& w = *impl_;
+  w.CheckOpen();
+  if (frames < 0) throw InvalidInput("AppendFrames: negative frame count");
+  if (frames == 0) return;
+  if (xyz_mm == nullptr && w.marker_count > 0) throw InvalidInput("AppendFrames: no data");
+  const int64_t row = w.marker_count * 3;
+  for (int64_t f = 0; f < frames; ++f) {
+    for (int64_t m = 0; m < w.marker_count; ++m) {
+      bool missing = std::isnan(xyz_mm[f * row + m * 3]);
+      if (missing && !w.in_gap[static_cast<size_t>(m)]) ++w.gaps;
+      w.in_gap[static_cast<size_t>(m)] = missing;
+    }
+  }
+  const float* p = xyz_mm;
+  int64_t remaining = frames;
+  if (w.buffered > 0) {
+    int64_t take = std::min(remaining, w.chunk_frames - w.buffered);
+    if (row > 0) std::copy(p, p + take * row, w.buffer.begin() + w.buffered * row);
+    w.buffered += take;
+    remaining -= take;
+    if (row > 0) p += take * row;
+    if (w.buffered == w.chunk_frames) {
+      w.WriteBlock(w.buffer.data(), w.buffered);
+      w.buffered = 0;
+    }
+  }
+  if (remaining >= w.chunk_frames) {
+    // Whole chunks straight from the caller's memory.
+    int64_t whole = remaining / w.chunk_frames * w.chunk_frames;
+    w.WriteBlock(p, whole);
+    remaining -= whole;
+    if (row > 0) p += whole * row;
+  }
+  if (remaining > 0) {
+    if (w.buffer.empty()) w.buffer.resize(static_cast<size_t>(w.chunk_frames * row));
+    if (row > 0) std::copy(p, p + remaining * row, w.buffer.begin());
+    w.buffered = remaining;
+  }
+}
+
+void CorpusTransaction::TakeWriter::AppendAnalog(const float* values, int64_t samples) {
+  auto lock = h5::Lock();
+  Impl& w = *impl_;
+  w.CheckOpen();
+  if (samples < 0) throw InvalidInput("AppendAnalog: negative sample count");
+  if (samples == 0) return;
+  if (w.analog_channels == 0) throw InvalidInput("take '" + w.name + "' was begun without analog channels");
+  if (values == nullptr) throw InvalidInput("AppendAnalog: no data");
+  Append2D(w.analog.get(), w.analog_samples, samples, w.analog_channels, values, w.tx->where,
+           w.object + "/analog/data");
+  w.analog_samples += samples;
+}
+
+void CorpusTransaction::TakeWriter::Finish() {
+  auto lock = h5::Lock();
+  Impl& w = *impl_;
+  w.CheckOpen();
+  if (w.buffered > 0) {
+    w.WriteBlock(w.buffer.data(), w.buffered);
+    w.buffered = 0;
+  }
+  h5::WriteAttr(w.markers.get(), "gaps", w.gaps, w.tx->where, w.object + "/markers");
+  std::vector<float>().swap(w.buffer);
+  w.analog.Reset();
+  w.markers.Reset();
+  w.group.Reset();
+  w.finished = true;
+  --w.tx->open_writers;
+}
+
+CorpusTransaction::TakeWriter CorpusTransaction::BeginTake(const Take& h, IfTakeExists if_exists) {
+  ValidateTakeName(h.name);
+  const int64_t marker_count = static_cast<int64_t>(h.marker_names.size());
+  const int64_t channels = h.analog.channels();
+  if (h.analog.samples < 0 || h.analog.data.size() != static_cast<size_t>(h.analog.samples * channels)) {
+    throw InvalidInput("take '" + h.name + "': analog data has " + std::to_string(h.analog.data.size()) +
+                       " values, expected samples × channels = " + std::to_string(h.analog.samples) + " × " +
+                       std::to_string(channels));
+  }
+  CheckAudio(h.audio);
+  auto lock = h5::Lock();
+  Impl& t = *impl_;
+  t.CheckUsable();
+  const Where& where = t.where;
+  const std::string obj = TakeObject(h.name);
+  Handle takes = t.Takes();
+  if (h5::LinkExists(takes.get(), h.name)) {
+    if (if_exists == IfTakeExists::kFail) throw InvalidInput(t.path + ": a take named '" + h.name + "' already exists");
+    h5::Check(H5Ldelete(takes.get(), h.name.c_str(), H5P_DEFAULT), where, "cannot delete", obj);
+    t.freed_space = true;
+  }
+  auto w = std::make_unique<TakeWriter::Impl>();
+  w->tx = &t;
+  w->name = h.name;
+  w->object = obj;
+  w->marker_count = marker_count;
+  w->analog_channels = channels;
+  w->in_gap.assign(static_cast<size_t>(marker_count), 0);
+  w->group = h5::CreateGroup(takes.get(), h.name, where, obj);
+  ++t.open_writers;
+  TakeWriter writer(std::move(w));  // from here on, a failure removes the partial take
+  TakeWriter::Impl& wi = *writer.impl_;
+  hid_t g = wi.group.get();
+
+  const std::string csw_version = h.provenance.csw_version.empty() ? CSW_VERSION : h.provenance.csw_version;
+  const std::string imported_utc = h.provenance.imported_utc.empty() ? NowUtc() : h.provenance.imported_utc;
+  h5::WriteAttr(g, "rate_hz", h.rate_hz, where, obj);
+  h5::WriteAttr(g, "first_frame", h.first_frame, where, obj);
+  h5::WriteAttr(g, "source_units", h.source_units, where, obj);
+  h5::WriteAttr(g, "imported_utc", imported_utc, where, obj);
+  h5::WriteAttr(g, "csw_version", csw_version, where, obj);
+  h5::WriteStrings(g, "marker_names", h.marker_names, where, obj + "/marker_names");
+  {
+    const std::string mobj = obj + "/markers";
+    // With no markers the marker dimension must be extendible for a valid chunk shape.
+    hsize_t dims[3] = {0, static_cast<hsize_t>(marker_count), 3};
+    hsize_t maxdims[3] = {H5S_UNLIMITED, marker_count > 0 ? static_cast<hsize_t>(marker_count) : H5S_UNLIMITED, 3};
+    hsize_t chunk[3] = {static_cast<hsize_t>(wi.chunk_frames), static_cast<hsize_t>(std::max<int64_t>(1, marker_count)),
+                        3};
+    Handle space = h5::Own(H5Screate_simple(3, dims, maxdims), H5Sclose, where, "cannot create", mobj);
+    Handle dcpl = h5::Own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, where, "cannot create", mobj);
+    h5::Check(H5Pset_chunk(dcpl.get(), 3, chunk), where, "cannot chunk", mobj);
+    h5::Check(H5Pset_shuffle(dcpl.get()), where, "cannot set the shuffle filter of", mobj);
+    h5::Check(H5Pset_deflate(dcpl.get(), kCorpusDeflateLevel), where, "cannot set the deflate filter of", mobj);
+    float fill = kMissing;
+    h5::Check(H5Pset_fill_value(dcpl.get(), H5T_NATIVE_FLOAT, &fill), where, "cannot set the fill value of", mobj);
+    wi.markers = h5::Own(
+        H5Dcreate2(g, "markers", H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT), H5Dclose,
+        where, "cannot create", mobj);
+    h5::WriteAttr(wi.markers.get(), "units", std::string("mm"), where, mobj);
+  }
+  if (channels > 0) {
+    const std::string aobj = obj + "/analog";
+    Handle a = h5::CreateGroup(g, "analog", where, aobj);
+    h5::WriteStrings(a.get(), "names", h.analog.names, where, aobj + "/names");
+    h5::WriteStrings(a.get(), "units", PadTo(h.analog.units, h.analog.names.size()), where, aobj + "/units");
+    h5::WriteStrings(a.get(), "descriptions", PadTo(h.analog.descriptions, h.analog.names.size()), where,
+                     aobj + "/descriptions");
+    wi.analog = CreateExtendible2D(a.get(), "data", channels, std::max<int64_t>(1, kAnalogChunkBytes / (4 * channels)),
+                                   where, aobj + "/data");
+    h5::WriteAttr(wi.analog.get(), "rate_hz", h.analog.rate_hz, where, aobj + "/data");
+    Append2D(wi.analog.get(), 0, h.analog.samples, channels, h.analog.data.data(), where, aobj + "/data");
+    wi.analog_samples = h.analog.samples;
+  }
+  WriteEvents(g, h.events, where, obj);
+  WriteTierGroups(g, h.tiers, where, obj);
+  WriteAudioGroup(g, h.audio, h.audio_path, where, obj);
+  WriteProvenance(g, h.provenance, csw_version, imported_utc, where, obj);
+  return writer;
+}
+
+void CorpusTransaction::WriteTake(const Take& take, IfTakeExists if_exists) {
+  if (take.frames() > 0 && take.markers.markers() != static_cast<int64_t>(take.marker_names.size())) {
+    throw InvalidInput("take '" + take.name + "' has " + std::to_string(take.markers.markers()) + " markers but " +
+                       std::to_string(take.marker_names.size()) + " marker names");
+  }
+  TakeWriter w = BeginTake(take, if_exists);
+  w.AppendFrames(take.markers.data().data(), take.frames());
+  w.Finish();
+}
+
+}  // namespace csw

@@ -1,0 +1,137 @@
+#pragma once
+// The HDF5 corpus store: one file holding takes (and, later, models and
+// dictionaries). The layout is documented in docs/corpus-format.md so that h5py
+// and MATLAB users read it without this code.
+//
+// Reading goes through Corpus (a read-only view); every change goes through a
+// CorpusTransaction, which writes a temporary sibling file and atomically
+// renames it over the corpus on Commit(): a process killed at any moment leaves
+// the previous corpus intact.
+//
+// Thread safety: all HDF5 calls of this module are serialized by one lock, so
+// different Corpus / CorpusTransaction objects may be used from different
+// threads; one object must not be used from two threads at once.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/take.h"
+
+namespace csw {
+
+inline constexpr int kCorpusFormatVersion = 1;
+// Markers are stored in chunks of kCorpusChunkFrames frames × all markers × 3,
+// with the shuffle filter then deflate at kCorpusDeflateLevel.
+inline constexpr int64_t kCorpusChunkFrames = 256;
+inline constexpr int kCorpusDeflateLevel = 1;
+
+struct TakeSummary {
+  std::string name;
+  double rate_hz = 0.0;
+  int64_t frames = 0;
+  int64_t markers = 0;
+  int64_t gaps = 0;  // total gap count over markers (maximal runs of missing frames)
+  double duration_s = 0.0;
+  std::vector<std::string> tier_names;
+  bool has_audio = false;
+  int64_t analog_channels = 0;
+};
+
+// A read-only view of a corpus file. Cheap to copy (copies share the open file).
+class Corpus {
+ public:
+  // Opens and validates the corpus: throws IoError when the file cannot be
+  // read, ParseError naming the file (and the take) when it is not an HDF5
+  // file, not a csw corpus, of a newer format version, or damaged.
+  static Corpus Open(const std::string& path);
+
+  std::vector<TakeSummary> Takes() const;  // in name order
+  TakeSummary Summary(const std::string& take) const;
+  bool HasTake(const std::string& name) const;
+  // Everything about one take. Throws InvalidInput when there is no such take.
+  Take LoadTake(const std::string& name) const;
+  // Frames [first, first + count) of one take, for streaming reads; throws
+  // InvalidInput when the range is not inside the take.
+  MarkerArray LoadMarkers(const std::string& take, int64_t first, int64_t count) const;
+  std::string path() const;
+
+ private:
+  struct Impl;
+  explicit Corpus(std::shared_ptr<const Impl> impl) : impl_(std::move(impl)) {}
+  std::shared_ptr<const Impl> impl_;
+};
+
+enum class IfTakeExists { kFail, kReplace };
+
+// Crash-safe writing. All changes go to a temporary sibling file (a copy of the
+// existing corpus, or a new corpus); Commit() flushes, fsyncs and atomically
+// renames it over the corpus, then fsyncs the directory. Without Commit() the
+// destructor removes the temporary file. Only one transaction per corpus may
+// be open at a time (an advisory lock on a sibling ".<name>.csw-lock" file);
+// a second one throws IoError.
+class CorpusTransaction {
+ public:
+  // Creates the corpus (in the temporary file) when it does not exist; throws
+  // ParseError when an existing file is not a valid corpus.
+  explicit CorpusTransaction(const std::string& path);
+  ~CorpusTransaction();
+  CorpusTransaction(const CorpusTransaction&) = delete;
+  CorpusTransaction& operator=(const CorpusTransaction&) = delete;
+
+  // Streams one take's markers (and optionally analog samples) into the
+  // corpus; memory stays O(one chunk). Must be finished before Commit(); a
+  // writer destroyed unfinished removes its partial take. Must not outlive its
+  // transaction.
+  class TakeWriter {
+   public:
+    TakeWriter(TakeWriter&&) noexcept;
+    TakeWriter& operator=(TakeWriter&&) noexcept;
+    ~TakeWriter();
+
+    // frames × markers × 3 floats (mm, NaN = missing), frame-major.
+    void AppendFrames(const float* xyz_mm, int64_t frames);
+    // samples × channels floats; the channels are those of the header's analog.
+    void AppendAnalog(const float* values, int64_t samples);
+    // Writes the remaining buffered frames and the summary attributes.
+    void Finish();
+    int64_t frames_written() const;
+
+   private:
+    friend class CorpusTransaction;
+    struct Impl;
+    explicit TakeWriter(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+  };
+
+  // Starts a take from everything but its markers: name, rate, first_frame,
+  // marker_names, source_units, analog (its data, possibly empty, is written
+  // at once; more may follow with AppendAnalog), events, tiers, audio,
+  // audio_path and provenance. header.markers is ignored. Throws InvalidInput
+  // when the name is not a valid take name, or a take of that name exists
+  // and if_exists is kFail.
+  TakeWriter BeginTake(const Take& header, IfTakeExists if_exists = IfTakeExists::kFail);
+  // The whole take at once (BeginTake + AppendFrames + Finish).
+  void WriteTake(const Take& take, IfTakeExists if_exists = IfTakeExists::kFail);
+  bool HasTake(const std::string& name) const;
+  std::vector<std::string> TakeNames() const;
+  // Throws InvalidInput when there is no such take.
+  void RemoveTake(const std::string& name);
+  // Replaces all label tiers of a take.
+  void WriteTiers(const std::string& take, const std::vector<LabelTier>& tiers);
+  // Replaces the audio of a take (an empty audio removes the samples).
+  void WriteAudio(const std::string& take, const Audio& audio, const std::string& source_path);
+  // Makes every change durable and visible at path(). Throws when a
+  // TakeWriter is still open; the transaction cannot be used afterwards.
+  void Commit();
+
+  const std::string& path() const;
+  // The temporary file used while a transaction on corpus_path is open.
+  static std::string TempPath(const std::string& corpus_path);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace csw
