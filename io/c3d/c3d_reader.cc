@@ -35,7 +35,10 @@ struct Param {
   int64_t file_offset = 0;
   int64_t Count() const {
     int64_t n = 1;
-    for (int d : dims) n *= d;
+    for (int d : dims) {
+      n *= d;
+      if (n > (int64_t{1} << 40)) return int64_t{1} << 40;  // saturate: hostile dimensions
+    }
     return n;
   }
 };
@@ -678,14 +681,17 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
       e.label = Trim(std::string(reinterpret_cast<const char*>(h + 396 + 4 * i), 4));
       info_.events.push_back(e);
     }
-    if (table.HasGroup("EVENT")) {
-      std::vector<std::string> labels = Strings(table.Find("EVENT", "LABELS"));
-      std::vector<std::string> contexts = Strings(table.Find("EVENT", "CONTEXTS"));
-      std::vector<std::string> descriptions = Strings(table.Find("EVENT", "DESCRIPTIONS"));
-      const Param* p_times = table.Find("EVENT", "TIMES");
+    // BKIN Dexterit-E (sample_22) writes a Vicon-like group named EVENTS.
+    std::string ev = table.Find("EVENT", "TIMES") ? "EVENT" : table.Find("EVENTS", "TIMES") ? "EVENTS" : "";
+    if (ev == "EVENTS") warn("events read from the non-standard EVENTS group");
+    if (!ev.empty()) {
+      std::vector<std::string> labels = Strings(table.Find(ev, "LABELS"));
+      std::vector<std::string> contexts = Strings(table.Find(ev, "CONTEXTS"));
+      std::vector<std::string> descriptions = Strings(table.Find(ev, "DESCRIPTIONS"));
+      const Param* p_times = table.Find(ev, "TIMES");
       std::vector<double> times = Numbers(p_times, proc);
       int64_t n = static_cast<int64_t>(times.size() / 2);
-      if (auto used = Number(table.Find("EVENT", "USED"), proc)) {
+      if (auto used = Number(table.Find(ev, "USED"), proc)) {
         int64_t u = static_cast<int64_t>(*used);
         if (u < n) n = std::max<int64_t>(u, 0);
         if (u > n) warn("EVENT:USED (" + std::to_string(u) + ") exceeds the " + std::to_string(n) + " stored times");
