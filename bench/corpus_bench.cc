@@ -83,7 +83,12 @@ void BM_StreamTakeIntoCorpus(benchmark::State& state) {
   state.counters["ratio"] = bytes / static_cast<double>(fs::file_size(path));
   fs::remove_all(dir);
 }
-BENCHMARK(BM_StreamTakeIntoCorpus)->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StreamTakeIntoCorpus)
+    ->Arg(100)
+    ->Arg(1000)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 
 void BM_LoadMarkersWindow(benchmark::State& state) {
   fs::path dir = BenchDir();

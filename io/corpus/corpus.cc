@@ -4,7 +4,10 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <libdeflate.h>
+
 #include <algorithm>
+#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +15,8 @@
 #include <ctime>
 #include <filesystem>
 #include <system_error>
+#include <thread>
+#include <atomic>
 
 #include "core/error.h"
 #include "io/corpus/hdf5_util.h"
@@ -34,6 +39,26 @@ constexpr int64_t kAnalogChunkBytes = 256 * 1024;
 constexpr int64_t kMaxLoadFloats = int64_t{1} << 31;
 
 std::string TakeObject(const std::string& name) { return "/takes/" + name; }
+
+// HDF5's shuffle filter for 4-byte elements: byte j of element i goes to
+// j * n + i, so the slowly varying sign/exponent bytes end up together.
+void Shuffle4(const float* in, size_t n, uint8_t* out) {
+  const auto* bytes = reinterpret_cast<const uint8_t*>(in);
+  uint8_t* o0 = out;
+  uint8_t* o1 = out + n;
+  uint8_t* o2 = out + 2 * n;
+  uint8_t* o3 = out + 3 * n;
+  for (size_t i = 0; i < n; ++i) {
+    o0[i] = bytes[4 * i];
+    o1[i] = bytes[4 * i + 1];
+    o2[i] = bytes[4 * i + 2];
+    o3[i] = bytes[4 * i + 3];
+  }
+}
+
+struct CompressorDeleter {
+  void operator()(libdeflate_compressor* c) const { libdeflate_free_compressor(c); }
+};
 
 ParseError Damaged(const Where& where, const std::string& what) {
   return ParseError({where.file, std::nullopt, std::nullopt}, what);
@@ -787,33 +812,116 @@ struct CorpusTransaction::TakeWriter::Impl {
   int64_t analog_channels = 0;
   int64_t analog_samples = 0;
   int64_t chunk_frames = kCorpusChunkFrames;
-  std::vector<float> buffer;  // up to chunk_frames frames not yet written
+  // Frames are gathered into a batch of a few chunks, which are deflated in
+  // parallel (one compressor per thread) and then stored in order.
+  int threads = 1;
+  int64_t batch_chunks = 1;
+  std::vector<float> buffer;  // batch_chunks * chunk_frames frames
   int64_t buffered = 0;
   int64_t flushed = 0;
   std::vector<uint8_t> in_gap;
   int64_t gaps = 0;
   bool finished = false;
+  std::vector<std::unique_ptr<libdeflate_compressor, CompressorDeleter>> compressors;  // per thread
+  std::vector<std::vector<uint8_t>> shuffled;                                           // per thread
+  std::vector<std::vector<uint8_t>> compressed;                                         // per chunk
+  std::vector<size_t> compressed_size;                                                  // per chunk
 
   void CheckOpen() const {
     if (finished) throw Error(tx->path + ": take '" + name + "' was already finished");
     tx->CheckUsable();
   }
 
-  void WriteBlock(const float* data, int64_t frames) {
+  int64_t row() const { return marker_count * 3; }
+  int64_t batch_frames() const { return batch_chunks * chunk_frames; }
+
+  void Allocate() {
+    if (!buffer.empty() || marker_count == 0) return;
+    const size_t chunk_bytes = static_cast<size_t>(chunk_frames * row()) * sizeof(float);
+    buffer.resize(static_cast<size_t>(batch_frames() * row()));
+    for (int t = 0; t < threads; ++t) {
+      compressors.emplace_back(libdeflate_alloc_compressor(kCorpusDeflateLevel));
+      if (!compressors.back()) throw Error("out of memory allocating a deflate compressor");
+      shuffled.emplace_back(chunk_bytes);
+    }
+    const size_t bound = libdeflate_zlib_compress_bound(compressors[0].get(), chunk_bytes);
+    compressed.assign(static_cast<size_t>(batch_chunks), std::vector<uint8_t>(bound));
+    compressed_size.assign(static_cast<size_t>(batch_chunks), 0);
+  }
+
+  void Release() {
+    std::vector<float>().swap(buffer);
+    compressors.clear();
+    shuffled.clear();
+    compressed.clear();
+    compressed_size.clear();
+  }
+
+  // Writes the `buffered` frames of the batch, starting at `flushed` (a chunk
+  // boundary). Each chunk is shuffled and deflated here (libdeflate, zlib
+  // format: exactly what HDF5's shuffle + deflate filters produce and read)
+  // and stored with H5Dwrite_chunk; a last partial chunk is padded with NaN.
+  void FlushBatch() {
+    if (buffered == 0) return;
     const std::string obj = object + "/markers";
+    const int64_t frames = buffered;
     hsize_t dims[3] = {static_cast<hsize_t>(flushed + frames), static_cast<hsize_t>(marker_count), 3};
     h5::Check(H5Dset_extent(markers.get(), dims), tx->where, "cannot extend", obj);
-    if (marker_count > 0) {
-      Handle fspace = h5::Own(H5Dget_space(markers.get()), H5Sclose, tx->where, "cannot write", obj);
-      hsize_t start[3] = {static_cast<hsize_t>(flushed), 0, 0};
-      hsize_t cnt[3] = {static_cast<hsize_t>(frames), static_cast<hsize_t>(marker_count), 3};
-      h5::Check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, cnt, nullptr), tx->where,
-                "cannot select", obj);
-      Handle mspace = h5::Own(H5Screate_simple(3, cnt, nullptr), H5Sclose, tx->where, "cannot write", obj);
-      h5::Check(H5Dwrite(markers.get(), H5T_NATIVE_FLOAT, mspace.get(), fspace.get(), H5P_DEFAULT, data), tx->where,
-                "cannot write", obj);
+    if (marker_count == 0) {
+      flushed += frames;
+      buffered = 0;
+      return;
+    }
+    if constexpr (std::endian::native != std::endian::little) {
+      WriteThroughHdf5(frames, obj);
+      return;
+    }
+    const int64_t chunks = (frames + chunk_frames - 1) / chunk_frames;
+    const size_t chunk_values = static_cast<size_t>(chunk_frames * row());
+    std::fill(buffer.begin() + frames * row(), buffer.begin() + chunks * chunk_frames * row(), kMissing);
+    std::atomic<bool> failed{false};
+    auto work = [&](int t) {
+      for (int64_t c = t; c < chunks; c += threads) {
+        Shuffle4(buffer.data() + static_cast<size_t>(c) * chunk_values, chunk_values, shuffled[t].data());
+        auto& out = compressed[static_cast<size_t>(c)];
+        size_t size = libdeflate_zlib_compress(compressors[t].get(), shuffled[t].data(), shuffled[t].size(),
+                                               out.data(), out.size());
+        if (size == 0) failed = true;
+        compressed_size[static_cast<size_t>(c)] = size;
+      }
+    };
+    const int helpers = static_cast<int>(std::min<int64_t>(threads, chunks)) - 1;
+    std::vector<std::thread> pool;
+    for (int t = 1; t <= helpers; ++t) pool.emplace_back(work, t);
+    work(0);
+    for (auto& th : pool) th.join();
+    if (helpers + 1 < threads) {
+      // Chunks assigned to threads that were not started.
+      for (int t = helpers + 1; t < threads; ++t) work(t);
+    }
+    if (failed) throw Error(tx->path + ": deflate failed on a chunk of " + obj);
+    for (int64_t c = 0; c < chunks; ++c) {
+      hsize_t offset[3] = {static_cast<hsize_t>(flushed + c * chunk_frames), 0, 0};
+      h5::Check(H5Dwrite_chunk(markers.get(), H5P_DEFAULT, 0, offset, compressed_size[static_cast<size_t>(c)],
+                               compressed[static_cast<size_t>(c)].data()),
+                tx->where, "cannot write a chunk of", obj);
     }
     flushed += frames;
+    buffered = 0;
+  }
+
+  // Portable path (big-endian hosts): let HDF5 run its own filters.
+  void WriteThroughHdf5(int64_t frames, const std::string& obj) {
+    Handle fspace = h5::Own(H5Dget_space(markers.get()), H5Sclose, tx->where, "cannot write", obj);
+    hsize_t start[3] = {static_cast<hsize_t>(flushed), 0, 0};
+    hsize_t cnt[3] = {static_cast<hsize_t>(frames), static_cast<hsize_t>(marker_count), 3};
+    h5::Check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, cnt, nullptr), tx->where,
+              "cannot select", obj);
+    Handle mspace = h5::Own(H5Screate_simple(3, cnt, nullptr), H5Sclose, tx->where, "cannot write", obj);
+    h5::Check(H5Dwrite(markers.get(), H5T_NATIVE_FLOAT, mspace.get(), fspace.get(), H5P_DEFAULT, buffer.data()),
+              tx->where, "cannot write", obj);
+    flushed += frames;
+    buffered = 0;
   }
 };
 
@@ -850,7 +958,7 @@ void CorpusTransaction::TakeWriter::AppendFrames(const float* xyz_mm, int64_t fr
   if (frames < 0) throw InvalidInput("AppendFrames: negative frame count");
   if (frames == 0) return;
   if (xyz_mm == nullptr && w.marker_count > 0) throw InvalidInput("AppendFrames: no data");
-  const int64_t row = w.marker_count * 3;
+  const int64_t row = w.row();
   for (int64_t f = 0; f < frames; ++f) {
     for (int64_t m = 0; m < w.marker_count; ++m) {
       bool missing = std::isnan(xyz_mm[f * row + m * 3]);
@@ -858,30 +966,14 @@ void CorpusTransaction::TakeWriter::AppendFrames(const float* xyz_mm, int64_t fr
       w.in_gap[static_cast<size_t>(m)] = missing;
     }
   }
-  const float* p = xyz_mm;
-  int64_t remaining = frames;
-  if (w.buffered > 0) {
-    int64_t take = std::min(remaining, w.chunk_frames - w.buffered);
-    if (row > 0) std::copy(p, p + take * row, w.buffer.begin() + w.buffered * row);
+  w.Allocate();
+  int64_t done = 0;
+  while (done < frames) {
+    int64_t take = std::min(frames - done, w.batch_frames() - w.buffered);
+    if (row > 0) std::copy(xyz_mm + done * row, xyz_mm + (done + take) * row, w.buffer.begin() + w.buffered * row);
     w.buffered += take;
-    remaining -= take;
-    if (row > 0) p += take * row;
-    if (w.buffered == w.chunk_frames) {
-      w.WriteBlock(w.buffer.data(), w.buffered);
-      w.buffered = 0;
-    }
-  }
-  if (remaining >= w.chunk_frames) {
-    // Whole chunks straight from the caller's memory.
-    int64_t whole = remaining / w.chunk_frames * w.chunk_frames;
-    w.WriteBlock(p, whole);
-    remaining -= whole;
-    if (row > 0) p += whole * row;
-  }
-  if (remaining > 0) {
-    if (w.buffer.empty()) w.buffer.resize(static_cast<size_t>(w.chunk_frames * row));
-    if (row > 0) std::copy(p, p + remaining * row, w.buffer.begin());
-    w.buffered = remaining;
+    done += take;
+    if (w.buffered == w.batch_frames()) w.FlushBatch();
   }
 }
 
@@ -902,12 +994,9 @@ void CorpusTransaction::TakeWriter::Finish() {
   auto lock = h5::Lock();
   Impl& w = *impl_;
   w.CheckOpen();
-  if (w.buffered > 0) {
-    w.WriteBlock(w.buffer.data(), w.buffered);
-    w.buffered = 0;
-  }
+  w.FlushBatch();
   h5::WriteAttr(w.markers.get(), "gaps", w.gaps, w.tx->where, w.object + "/markers");
-  std::vector<float>().swap(w.buffer);
+  w.Release();
   w.analog.Reset();
   w.markers.Reset();
   w.group.Reset();
@@ -943,6 +1032,8 @@ CorpusTransaction::TakeWriter CorpusTransaction::BeginTake(const Take& h, IfTake
   w->marker_count = marker_count;
   w->analog_channels = channels;
   w->in_gap.assign(static_cast<size_t>(marker_count), 0);
+  w->threads = static_cast<int>(std::clamp<unsigned>(std::thread::hardware_concurrency(), 1, 4));
+  w->batch_chunks = 2 * w->threads;
   w->group = h5::CreateGroup(takes.get(), h.name, where, obj);
   ++t.open_writers;
   TakeWriter writer(std::move(w));  // from here on, a failure removes the partial take
