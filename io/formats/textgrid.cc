@@ -1,6 +1,7 @@
 #include "io/formats/textgrid.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <string_view>
@@ -54,7 +55,7 @@ class Lexer {
         SkipWord();
         continue;
       }
-      if ((c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.') {
+      if ((c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || IsNonFiniteWord()) {
         size_t end = pos_;
         while (end < text_.size() && !IsSeparator(text_[end]) && text_[end] != '"') ++end;
         tok.kind = Token::Kind::kNumber;
@@ -73,6 +74,15 @@ class Lexer {
   static bool IsSeparator(char c) {
     return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '=' ||
            (static_cast<unsigned char>(c) < 0x20);
+  }
+  // "nan", "inf", "infinity" (any case) are read as (bad) numbers, not skipped
+  // as labels, so that they are reported where they stand.
+  bool IsNonFiniteWord() const {
+    size_t end = pos_;
+    while (end < text_.size() && !IsSeparator(text_[end]) && text_[end] != '"') ++end;
+    std::string word(text_.substr(pos_, end - pos_));
+    for (char& ch : word) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    return word == "nan" || word == "inf" || word == "infinity";
   }
   void SkipSeparators() {
     while (pos_ < text_.size() && IsSeparator(text_[pos_])) {
@@ -128,7 +138,7 @@ class TextGridParser {
     Token tok = lexer_.Next();
     if (tok.kind != Token::Kind::kString ||
         (tok.text != "ooTextFile" && tok.text != "ooTextFile short")) {
-      throw Error(tok.line, "not a Praat text file (expected File type = \"ooTextFile\")");
+      throw Error(1, "not a Praat text file (expected File type = \"ooTextFile\")");
     }
     std::string object_class = ExpectString("the object class");
     if (object_class.rfind("TextGrid", 0) != 0) {
@@ -317,27 +327,14 @@ void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers,
     CheckFinite(tier_end, "tier \"" + tier.name + "\" end");
     if (tier_start > tier_end) throw InvalidInput("WriteTextGrid: tier \"" + tier.name + "\" start > end");
     const bool intervals = tier.kind == LabelTier::Kind::kInterval;
-    std::vector<Label> labels;
-    labels.reserve(tier.labels.size() + 2);
-    if (intervals) {
-      double cursor = tier_start;
-      for (const Label& l : tier.labels) {
-        CheckFinite(l.start_s, "a label start in tier \"" + tier.name + "\"");
-        CheckFinite(l.end_s, "a label end in tier \"" + tier.name + "\"");
-        if (l.start_s > l.end_s) {
-          throw InvalidInput("WriteTextGrid: tier \"" + tier.name + "\" has a label with start > end");
-        }
-        if (l.start_s > cursor) labels.push_back({cursor, l.start_s, ""});
-        labels.push_back(l);
-        cursor = std::max(cursor, l.end_s);
-      }
-      if (cursor < tier_end) labels.push_back({cursor, tier_end, ""});
-    } else {
-      for (const Label& l : tier.labels) {
-        CheckFinite(l.start_s, "a point time in tier \"" + tier.name + "\"");
-        labels.push_back(l);
+    for (const Label& l : tier.labels) {
+      CheckFinite(l.start_s, "a label time in tier \"" + tier.name + "\"");
+      CheckFinite(l.end_s, "a label time in tier \"" + tier.name + "\"");
+      if (intervals && l.start_s > l.end_s) {
+        throw InvalidInput("WriteTextGrid: tier \"" + tier.name + "\" has a label with start > end");
       }
     }
+    const std::vector<Label>& labels = tier.labels;
     if (!short_format) out += "    item [" + std::to_string(t + 1) + "]:\n";
     str("class", intervals ? "IntervalTier" : "TextTier", "        ");
     str("name", tier.name, "        ");
@@ -369,6 +366,21 @@ void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers,
   file.write(out.data(), static_cast<std::streamsize>(out.size()));
   file.close();
   if (!file) throw IoError(path, "write failed");
+}
+
+LabelTier FillIntervalGaps(const LabelTier& tier) {
+  if (tier.kind != LabelTier::Kind::kInterval) return tier;
+  LabelTier out = tier;
+  out.labels.clear();
+  out.labels.reserve(tier.labels.size() * 2 + 1);
+  double cursor = tier.start_s;
+  for (const Label& l : tier.labels) {
+    if (l.start_s > cursor) out.labels.push_back({cursor, l.start_s, ""});
+    out.labels.push_back(l);
+    cursor = std::max(cursor, l.end_s);
+  }
+  if (cursor < tier.end_s) out.labels.push_back({cursor, tier.end_s, ""});
+  return out;
 }
 
 }  // namespace csw

@@ -39,13 +39,19 @@ std::vector<LabelTier> ReadTextGrid(const std::string& path, double* xmin = null
 
 // Writes a TextGrid in UTF-8 (no BOM), Praat's long text format by default or
 // the short format. Numbers are written in the shortest text that reads back to
-// the same double, so write -> read is exact. For Praat, interval tiers are made
-// contiguous: an empty interval fills any gap before, between or after the
-// labels (tiers read from a TextGrid never have gaps). A tier whose start_s and
-// end_s are both 0 while it holds labels gets the grid's xmin/xmax. Throws
-// InvalidInput for non-finite times or xmin > xmax, IoError when the file cannot
-// be written.
+// the same double, so write -> read is exact. Labels are written as they are,
+// gaps included (Praat reads such files; use FillIntervalGaps first for tiers
+// that must cover their domain, e.g. tiers read from an EAF). A tier whose
+// start_s and end_s are both 0 while it holds labels gets the grid's xmin/xmax.
+// Throws InvalidInput for non-finite times, xmin > xmax or a label with
+// start > end, IoError when the file cannot be written.
 void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers, double xmin,
                    double xmax, bool short_format = false);
+
+// An interval tier made contiguous as Praat and praatio expect: an empty-text
+// interval is inserted in every gap before, between and after the labels within
+// [tier.start_s, tier.end_s] (labels assumed in time order; overlaps are left
+// as they are). Point tiers are returned unchanged.
+LabelTier FillIntervalGaps(const LabelTier& tier);
 
 }  // namespace csw
