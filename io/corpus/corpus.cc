@@ -653,7 +653,7 @@ struct CorpusTransaction::Impl {
   Handle file;
   int open_writers = 0;
   bool committed = false;
-  bool freed_space = false;  // something was deleted: compact on commit
+  bool freed_space = false;  // something was deleted: maybe compact on commit
 
   ~Impl() {
     if (!committed) {
@@ -669,6 +669,19 @@ struct CorpusTransaction::Impl {
   }
 
   Handle Takes() { return h5::OpenGroup(file.get(), "takes", where, "/takes"); }
+
+  // Compacting rewrites the whole file: only worth it when this transaction
+  // freed at least 1 MiB or an eighth of the file (smaller leftovers are
+  // reclaimed by the next compaction, which copies only live objects).
+  bool WorthCompacting() const {
+    hssize_t free_bytes = H5Fget_freespace(file.get());
+    hsize_t size = 0;
+    if (free_bytes < 0 || H5Fget_filesize(file.get(), &size) < 0) {
+      h5::TakeErrorMessage();
+      return true;
+    }
+    return free_bytes >= (hssize_t{1} << 20) || static_cast<hsize_t>(free_bytes) * 8 >= size;
+  }
 
   // Rewrites the temporary file object by object so that the space of deleted
   // takes is not carried along forever.
@@ -784,7 +797,7 @@ void CorpusTransaction::Commit() {
   t.CheckUsable();
   if (t.open_writers > 0) throw Error(t.path + ": cannot commit while a take is still being written (call Finish)");
   h5::Check(H5Fflush(t.file.get(), H5F_SCOPE_GLOBAL), t.where, "cannot flush", t.temp);
-  if (t.freed_space) {
+  if (t.freed_space && t.WorthCompacting()) {
     t.Compact();
   } else if (!t.file.Reset()) {
     throw IoError(t.path, "cannot close " + t.temp + ": " + h5::TakeErrorMessage());
@@ -830,6 +843,26 @@ struct CorpusTransaction::TakeWriter::Impl {
   void CheckOpen() const {
     if (finished) throw Error(tx->path + ": take '" + name + "' was already finished");
     tx->CheckUsable();
+  }
+
+  // An unfinished writer removes its partial take, so that the transaction
+  // never commits half a take.
+  ~Impl() {
+    if (finished || tx == nullptr) return;
+    auto lock = h5::Lock();
+    analog.Reset();
+    markers.Reset();
+    group.Reset();
+    --tx->open_writers;
+    if (!tx->committed && tx->file.valid()) {
+      hid_t takes = H5Gopen2(tx->file.get(), "takes", H5P_DEFAULT);
+      if (takes >= 0) {
+        H5Ldelete(takes, name.c_str(), H5P_DEFAULT);
+        H5Gclose(takes);
+      }
+      H5Eclear2(H5E_DEFAULT);
+      tx->freed_space = true;
+    }
   }
 
   int64_t row() const { return marker_count * 3; }
@@ -929,25 +962,7 @@ CorpusTransaction::TakeWriter::TakeWriter(std::unique_ptr<Impl> impl) : impl_(st
 CorpusTransaction::TakeWriter::TakeWriter(TakeWriter&&) noexcept = default;
 CorpusTransaction::TakeWriter& CorpusTransaction::TakeWriter::operator=(TakeWriter&&) noexcept = default;
 
-CorpusTransaction::TakeWriter::~TakeWriter() {
-  if (!impl_ || impl_->finished) return;
-  auto lock = h5::Lock();
-  Impl& w = *impl_;
-  w.analog.Reset();
-  w.markers.Reset();
-  w.group.Reset();
-  --w.tx->open_writers;
-  if (!w.tx->committed && w.tx->file.valid()) {
-    // Remove the partial take so the transaction never commits half a take.
-    hid_t takes = H5Gopen2(w.tx->file.get(), "takes", H5P_DEFAULT);
-    if (takes >= 0) {
-      H5Ldelete(takes, w.name.c_str(), H5P_DEFAULT);
-      H5Gclose(takes);
-    }
-    H5Eclear2(H5E_DEFAULT);
-    w.tx->freed_space = true;
-  }
-}
+CorpusTransaction::TakeWriter::~TakeWriter() = default;
 
 int64_t CorpusTransaction::TakeWriter::frames_written() const { return impl_->flushed + impl_->buffered; }
 

@@ -343,6 +343,43 @@ TEST(Corpus, RemoveTakeAndReplaceTiersAndAudio) {
   EXPECT_EQ(Corpus::Open(path).LoadTake("b").audio_path, "");
 }
 
+TEST(Corpus, RepeatedTierEditsKeepTheFileSizeBounded) {
+  TempDir dir;
+  const std::string path = (dir / "c.h5").string();
+  Take t = MakeFullTake("t", 2000, 10);
+  WriteCorpus(path, {t});
+  const auto size_before = fs::file_size(path);
+  LabelTier tier = t.tiers[0];
+  for (int i = 0; i < 30; ++i) {
+    tier.labels[0].text = "edit " + std::to_string(i);
+    CorpusTransaction tx(path);
+    tx.WriteTiers("t", {tier});
+    tx.Commit();
+  }
+  EXPECT_LT(fs::file_size(path), size_before + (1u << 20));
+  Take back = Corpus::Open(path).LoadTake("t");
+  ASSERT_EQ(back.tiers.size(), 1u);
+  EXPECT_EQ(back.tiers[0].labels[0].text, "edit 29");
+  testing::ExpectSameMarkers(t.markers, back.markers);
+}
+
+TEST(Corpus, WriterReplacedByMoveRemovesItsPartialTake) {
+  TempDir dir;
+  const std::string path = (dir / "c.h5").string();
+  CorpusTransaction tx(path);
+  Take first = MakeFullTake("first", 10, 2);
+  Take second = MakeFullTake("second", 10, 2);
+  CorpusTransaction::TakeWriter w = tx.BeginTake(first);
+  w.AppendFrames(first.markers.data().data(), 5);
+  w = tx.BeginTake(second);  // abandons "first"
+  w.AppendFrames(second.markers.data().data(), 10);
+  w.Finish();
+  tx.Commit();
+  Corpus corpus = Corpus::Open(path);
+  EXPECT_FALSE(corpus.HasTake("first"));
+  ExpectSameTake(second, corpus.LoadTake("second"));
+}
+
 TEST(Corpus, TakeWithoutMarkersAnalogOrAudio) {
   TempDir dir;
   const std::string path = (dir / "c.h5").string();
