@@ -1,0 +1,152 @@
+#include "workbench/cli/commands.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+
+#include "workbench/jobs/jobs.h"
+
+namespace csw::cli {
+
+ProgressPrinter::ProgressPrinter(const bool* quiet) : quiet_(quiet), tty_(isatty(STDERR_FILENO) == 1) {}
+
+void ProgressPrinter::Print(const std::string& stage, double fraction) {
+  if (*quiet_) return;
+  if (fraction < 0) fraction = 0;
+  if (fraction > 1) fraction = 1;
+  if (stage != stage_) {
+    if (drawn_ && tty_) std::fputc('\n', stderr);
+    stage_ = stage;
+    last_tenth_ = -1;
+    last_percent_ = -1;
+  }
+  int percent = static_cast<int>(fraction * 100.0);
+  if (tty_) {
+    if (percent == last_percent_) return;
+    last_percent_ = percent;
+    const int width = 40;
+    int filled = static_cast<int>(fraction * width);
+    std::string bar(static_cast<size_t>(filled), '#');
+    bar.resize(width, '.');
+    std::fprintf(stderr, "\r%-24.24s [%s] %3d%%", stage.c_str(), bar.c_str(), percent);
+    std::fflush(stderr);
+    drawn_ = true;
+  } else {
+    int tenth = percent / 10;
+    if (tenth == last_tenth_) return;
+    last_tenth_ = tenth;
+    std::fprintf(stderr, "%s: %d%%\n", stage.c_str(), tenth * 10);
+  }
+}
+
+void ProgressPrinter::Done() {
+  if (drawn_ && tty_) std::fputc('\n', stderr);
+  drawn_ = false;
+  stage_.clear();
+}
+
+namespace {
+
+void PrintJson(const nlohmann::json& j) { std::cout << j.dump(2) << "\n"; }
+
+class InspectCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("inspect", "Print header facts of a C3D, TRC, TextGrid, EAF, WAV or corpus file");
+    sub_->add_option("file", file_, "File to inspect")->required();
+    sub_->add_flag("--json", json_, "Machine-readable JSON output");
+  }
+  int Run(Progress& progress) override {
+    nlohmann::json facts = jobs::Inspect(file_, progress);
+    if (json_) PrintJson(facts); else std::cout << jobs::InspectText(facts);
+    return 0;
+  }
+
+ private:
+  std::string file_;
+  bool json_ = false;
+};
+
+class ImportCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("import",
+                              "Import captures (.c3d, .trc) with their labels (.TextGrid, .eaf) and audio (.wav), "
+                              "paired by base name, into an HDF5 corpus in one crash-safe step");
+    sub_->add_option("files", options_.files, "Files to import")->required();
+    sub_->add_option("-o,--output", options_.corpus, "Corpus file (created when absent)")->required();
+    sub_->add_option("--markerset", options_.markerset, "Marker-set JSON every take must match");
+    sub_->add_flag("--replace", options_.replace, "Replace takes that already exist in the corpus");
+    sub_->add_flag("--json", json_, "Print the import summary as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    jobs::ImportResult r = jobs::Import(options_, progress);
+    if (json_) {
+      PrintJson({{"corpus", options_.corpus}, {"takes", r.takes}, {"frames", r.frames}, {"warnings", r.warnings}});
+    } else {
+      for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
+      std::cout << "imported " << r.takes.size() << " take(s), " << r.frames << " frames into " << options_.corpus
+                << "\n";
+    }
+    return 0;
+  }
+
+ private:
+  jobs::ImportOptions options_;
+  bool json_ = false;
+};
+
+class InfoCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("info", "Summarise a corpus: takes, durations, markers, gaps, tiers");
+    sub_->add_option("corpus", corpus_, "Corpus file")->required();
+    sub_->add_flag("--json", json_, "Machine-readable JSON output");
+  }
+  int Run(Progress&) override {
+    nlohmann::json info = jobs::Info(corpus_);
+    if (json_) PrintJson(info); else std::cout << jobs::InfoText(info);
+    return 0;
+  }
+
+ private:
+  std::string corpus_;
+  bool json_ = false;
+};
+
+class ExportCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("export", "Write one take of a corpus as C3D, TRC or CSV");
+    sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
+    sub_->add_option("--take", options_.take, "Take name")->required();
+    sub_->add_option("--format", options_.format, "c3d, trc or csv")
+        ->required()
+        ->check(CLI::IsMember({"c3d", "trc", "csv"}));
+    sub_->add_option("-o,--output", options_.output, "Output file")->required();
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    jobs::Export(options_, progress);
+    std::cout << "wrote " << options_.output << "\n";
+    return 0;
+  }
+
+ private:
+  jobs::ExportOptions options_;
+};
+
+}  // namespace
+
+std::vector<std::unique_ptr<Command>> MakeCommands() {
+  std::vector<std::unique_ptr<Command>> c;
+  c.push_back(std::make_unique<InspectCommand>());
+  c.push_back(std::make_unique<ImportCommand>());
+  c.push_back(std::make_unique<InfoCommand>());
+  c.push_back(std::make_unique<ExportCommand>());
+  return c;
+}
+
+}  // namespace csw::cli
