@@ -112,10 +112,14 @@ class Lexer {
         ++pos_;
         return;
       }
-      if (ch == '\r' && pos_ + 1 < text_.size() && text_[pos_ + 1] == '\n') {
+      if (ch == '\r') {  // CRLF or a lone CR inside a string: one line break
         tok->text.push_back('\n');
-        ++line_;
-        pos_ += 2;
+        if (pos_ + 1 < text_.size() && text_[pos_ + 1] == '\n') {
+          pos_ += 2;
+          ++line_;  // lines are counted at '\n' only
+        } else {
+          ++pos_;
+        }
         continue;
       }
       if (ch == '\n') ++line_;

@@ -12,7 +12,7 @@
 //     zero byte in the first code unit), Latin-1 bytes that are not valid UTF-8,
 //   - CRLF or LF line ends; "!" starts a comment running to the end of the line,
 //   - strings with doubled quotes ("" stands for one ") and line breaks inside
-//     (a CRLF inside a string is read as LF),
+//     (a CRLF or lone CR inside a string is read as LF, as Praat does),
 //   - interval tiers ("IntervalTier") and point tiers ("TextTier"),
 //   - "<absent>" tiers (a TextGrid with no tiers), gaps between intervals,
 //   - negative zero (-0), read as 0.

@@ -102,6 +102,10 @@ std::string UtcNow() {
 
 // Largest |coordinate| in millimetres accepted from a file.
 constexpr double kMaxCoordinateMm = 1e12;
+// Accepted frame rates and frame numbers.
+constexpr double kMinRateHz = 1e-6;
+constexpr double kMaxRateHz = 1e7;
+constexpr int64_t kMaxFrameNumber = int64_t{1} << 50;
 
 }  // namespace
 
@@ -154,12 +158,13 @@ Take ReadTrc(const std::string& path) {
     if (it == header.end()) return std::nullopt;
     return ParseFiniteDouble(it->second);
   };
+  auto plausible = [](std::optional<double> r) { return r && *r >= kMinRateHz && *r <= kMaxRateHz; };
   std::optional<double> rate = header_number("DataRate");
-  if (!rate || *rate <= 0) {
+  if (!plausible(rate)) {
     std::optional<double> camera = header_number("CameraRate");
-    if (!camera || *camera <= 0) {
-      throw error(3, "no valid DataRate or CameraRate in the header (a positive finite number "
-                     "is required)");
+    if (!plausible(camera)) {
+      throw error(3, "no valid DataRate or CameraRate in the header (a number between 1e-6 and "
+                     "1e7 Hz is required)");
     }
     warnings.push_back("TRC header: DataRate missing or invalid; CameraRate " +
                        formats_internal::FormatDouble(*camera) + " Hz used");
@@ -249,6 +254,10 @@ Take ReadTrc(const std::string& path) {
         throw error(ln, "column 2: time is not a finite number: '" +
                             std::string(time_field.substr(0, 40)) + "'");
       }
+    }
+    if (frame > kMaxFrameNumber || frame < -kMaxFrameNumber) {
+      throw error(ln, "column 1: frame number " + std::string(frame_field.substr(0, 40)) +
+                          " is out of range");
     }
     if (first_data_line) {
       take.first_frame = frame;

@@ -33,10 +33,11 @@
 //   unit string of the file.
 // - DataRate missing or invalid: CameraRate is used (warned).
 // Errors (csw::ParseError naming the file and line): empty file, not a TRC file,
-// header cut before the names line (BTK Truncated.trc), rate missing, zero,
-// negative or non-finite, a frame number or coordinate that is not a number,
-// an infinite or absurdly large (> 1e12 mm) coordinate, or a table whose implied
-// size (frames x markers) is far larger than the file could hold.
+// header cut before the names line (BTK Truncated.trc), rate missing or outside
+// [1e-6, 1e7] Hz, a frame number or coordinate that is not a number, a frame
+// number beyond +-2^50, an infinite or absurdly large (> 1e12 mm) coordinate,
+// or a table whose implied size (frames x markers) is far larger than the file
+// could hold (more than 8 cells per byte).
 // Missing file: csw::IoError.
 #include <string>
 
