@@ -27,6 +27,9 @@ struct Utterance {
   std::vector<Word> words;
   std::vector<Phone> phones;  // contiguous, covering [0, audio.duration_s()]
   Audio audio;                // mono, espeak-ng's sample rate (22050 Hz)
+  // Recoverable oddities (an espeak-ng phoneme name missing from the table, ...).
+  std::vector<std::string> warnings;
+  double duration_s() const { return phones.empty() ? 0.0 : phones.back().end_s; }
 };
 
 struct PhonetiseOptions {
@@ -46,7 +49,20 @@ Utterance Phonetise(const std::string& text, const PhonetiseOptions& options = {
 std::vector<LabelTier> UtteranceTiers(const Utterance& utterance);
 
 // The documented espeak-ng -> IPA mapping table (docs/phonetics.md): returns ""
-// for an unknown name.
+// for an unknown name and for pauses. When one espeak-ng phoneme stands for
+// several French phonemes (the affricate "dZ", the English diphthong "aI") the
+// IPA phonemes are separated by one space ("d ʒ", "a j").
 std::string EspeakToIpa(const std::string& espeak_name);
+// The same mapping split into phonemes: {} for an unknown name or a pause.
+std::vector<std::string> EspeakToIpaPhones(const std::string& espeak_name);
+// espeak-ng's pause phonemes ("_", "_:", "_!", "_|", ...).
+bool IsEspeakPause(const std::string& espeak_name);
+
+// The one place where espeak-ng's output is corrected towards the phonemes
+// actually spoken (docs/phonetics.md, "Exceptions"): espeak-ng writes the
+// semi-vowel [ɥ] as the vowel "y" ("cuisinier" -> k y i z i n j e), so a "y"
+// immediately followed by a vowel of the same word becomes "ɥ". Applied by
+// Phonetise(); exposed for tests and for phone lists built by other means.
+void ApplyIpaExceptions(std::vector<Phone>& phones);
 
 }  // namespace csw
