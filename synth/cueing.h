@@ -29,7 +29,13 @@ bool IsVowel(const std::string& ipa);
 bool IsConsonant(const std::string& ipa);  // semi-vowels j ɥ w count as consonants
 
 // Keys of an utterance's phones: rest "00" first and last, CV keys, lone consonants
-// at the side (1S), lone vowels with shape 5 (P5). Pauses ("") separate syllables.
+// at the side (1S), lone vowels with shape 5 (P5). Pauses ("") separate syllables;
+// phones that are neither vowels nor consonants of the tables (e.g. [h]) are not
+// cued and are skipped. A consonant pairs with the next vowel even across a word
+// boundary (enchaînement, liaison). The leading rest key spans [first phone start,
+// first key's a1_s], the trailing one [last key's end_s, last phone end]; with no
+// cued phone the result is one rest key spanning the phones.
+// docs/phonetics.md gives the rules with worked examples.
 std::vector<Key> CueKeys(const std::vector<Phone>& phones);
 
 }  // namespace csw

@@ -220,6 +220,85 @@ std::vector<KeyTiming> SampleTiming(const std::vector<Key>& keys, const PhasingM
   });
 }
 
+PhasingMeans MeasurePhasing(const std::vector<Key>& keys, const std::vector<KeyTiming>& timing) {
+  struct Acc {
+    int n = 0;
+    double sum[4] = {0, 0, 0, 0};
+    double sum2[4] = {0, 0, 0, 0};
+  };
+  Acc acc[3];
+  const size_t n = std::min(keys.size(), timing.size());
+  for (size_t i = 0; i < n; ++i) {
+    int slot = -1;
+    switch (keys[i].type) {
+      case KeyType::kCV: slot = 0; break;
+      case KeyType::kVowelAlone: slot = 1; break;
+      case KeyType::kConsonantAlone: slot = 2; break;
+      case KeyType::kRest: break;
+    }
+    if (slot < 0) continue;
+    const KeyTiming& t = timing[i];
+    const double a1 = keys[i].a1_s;
+    const double d[4] = {t.placement_start_s - a1, t.placement_target_s - a1, t.shape_start_s - a1,
+                         t.shape_target_s - a1};
+    Acc& a = acc[slot];
+    ++a.n;
+    for (int k = 0; k < 4; ++k) {
+      a.sum[k] += d[k];
+      a.sum2[k] += d[k] * d[k];
+    }
+  }
+  PhasingMeans out;
+  PhasingMeans::Entry* entries[3] = {&out.cv, &out.v, &out.c};
+  for (int s = 0; s < 3; ++s) {
+    const Acc& a = acc[s];
+    PhasingMeans::Entry& e = *entries[s];
+    e.count = a.n;
+    if (a.n == 0) continue;
+    double mean[4], sd[4];
+    for (int k = 0; k < 4; ++k) {
+      mean[k] = a.sum[k] / a.n;
+      sd[k] = std::sqrt(std::max(0.0, a.sum2[k] / a.n - mean[k] * mean[k]));
+    }
+    e.placement = {mean[0], sd[0], mean[1], sd[1]};
+    e.shape = {mean[2], sd[2], mean[3], sd[3]};
+  }
+  return out;
+}
+
+PhasingModel CalibratePhasing(const std::vector<Key>& keys, const PhasingModel& target, uint64_t seed,
+                              int iterations) {
+  if (std::string why = target.Check(); !why.empty()) throw InvalidInput("phasing model: " + why);
+  PhasingModel model = target;
+  struct Pair {
+    MovementTiming PhasingModel::*placement;
+    MovementTiming PhasingModel::*shape;
+    PhasingMeans::Entry PhasingMeans::*measured;
+  };
+  const Pair pairs[] = {{&PhasingModel::placement_cv, &PhasingModel::shape_cv, &PhasingMeans::cv},
+                        {&PhasingModel::placement_v, &PhasingModel::shape_v, &PhasingMeans::v},
+                        {&PhasingModel::placement_c, &PhasingModel::shape_c, &PhasingMeans::c}};
+  auto adjust = [](MovementTiming& in, const MovementTiming& want, const MovementTiming& got) {
+    MovementTiming next = in;
+    next.start_mean_s += want.start_mean_s - got.start_mean_s;
+    next.target_mean_s += want.target_mean_s - got.target_mean_s;
+    if (next.target_mean_s > next.start_mean_s && std::abs(next.start_mean_s) <= 5.0 &&
+        std::abs(next.target_mean_s) <= 5.0)
+      in = next;
+  };
+  for (int it = 0; it < iterations; ++it) {
+    std::mt19937_64 rng(seed);
+    const PhasingMeans got = MeasurePhasing(keys, SampleTiming(keys, model, rng));
+    for (const Pair& p : pairs) {
+      const PhasingMeans::Entry& e = got.*p.measured;
+      if (e.count == 0) continue;
+      adjust(model.*p.placement, target.*p.placement, e.placement);
+      adjust(model.*p.shape, target.*p.shape, e.shape);
+    }
+  }
+  return model;
+}
+
 std::vector<KeyTiming> MeanTiming(const std::vector<Key>& keys, const PhasingModel& model) {
   return Timing(keys, model, [](double mean, double) { return mean; });
 }

@@ -79,6 +79,26 @@ std::vector<KeyTiming> SampleTiming(const std::vector<Key>& keys, const PhasingM
 // The mean timing (every draw at its mean, same constraints).
 std::vector<KeyTiming> MeanTiming(const std::vector<Key>& keys, const PhasingModel& model);
 
+// Mean of (time - A1) over the keys of each type, for each of the four times
+// (what a phasing analysis measures). Types with no key keep zeros and count 0.
+struct PhasingMeans {
+  struct Entry {
+    int count = 0;
+    MovementTiming placement;  // sd fields hold the sample standard deviations
+    MovementTiming shape;
+  };
+  Entry cv, v, c;
+};
+PhasingMeans MeasurePhasing(const std::vector<Key>& keys, const std::vector<KeyTiming>& timing);
+
+// The constraints delay movements when syllables are short (at 350 ms per key the
+// CV placement starts about 16 ms later than its law says), so the means of the
+// produced timings differ from the model's. CalibratePhasing() returns a model
+// whose draws, constrained on these keys, reproduce `target`'s means: it
+// iterates `iterations` times on mean_in += target - measured (seeded draws).
+PhasingModel CalibratePhasing(const std::vector<Key>& keys, const PhasingModel& target, uint64_t seed,
+                              int iterations = 6);
+
 // A draw from N(mean, sd) truncated to [mean - k·sd, mean + k·sd]; portable
 // (does not use std::normal_distribution, whose output differs between libraries).
 double SampleTruncatedNormal(double mean, double sd, double k, std::mt19937_64& rng);

@@ -131,6 +131,32 @@ TEST(Phasing, ConstraintsHoldOnFastSpeech) {
   EXPECT_GT(t.back().placement_target_s, keys[keys.size() - 2].end_s);
 }
 
+TEST(Phasing, CalibrationRestoresMeansAtSpeechRate) {
+  // At 350 ms per key the constraints delay CV placement starts by ~16 ms; the
+  // calibrated model's constrained draws give back the target means.
+  const PhasingModel target;
+  std::vector<Key> keys = SyntheticKeys(3000, KeyType::kCV, 0.35);
+  for (size_t i = 1; i + 1 < keys.size(); i += 4) keys[i].type = KeyType::kVowelAlone;
+  std::mt19937_64 rng(9);
+  const PhasingMeans raw = MeasurePhasing(keys, SampleTiming(keys, target, rng));
+  EXPECT_GT(raw.cv.placement.start_mean_s - target.placement_cv.start_mean_s, 0.008);
+
+  const PhasingModel calibrated = CalibratePhasing(keys, target, 77);
+  EXPECT_EQ(calibrated.Check(), "");
+  EXPECT_LT(calibrated.placement_cv.start_mean_s, target.placement_cv.start_mean_s);
+  std::mt19937_64 fresh(1234);  // a different seed than the calibration's
+  const PhasingMeans m = MeasurePhasing(keys, SampleTiming(keys, calibrated, fresh));
+  EXPECT_GT(m.cv.count, 2000);
+  EXPECT_GT(m.v.count, 500);
+  EXPECT_EQ(m.c.count, 0);
+  EXPECT_NEAR(m.cv.placement.start_mean_s, target.placement_cv.start_mean_s, 0.005);
+  EXPECT_NEAR(m.cv.placement.target_mean_s, target.placement_cv.target_mean_s, 0.005);
+  EXPECT_NEAR(m.cv.shape.start_mean_s, target.shape_cv.start_mean_s, 0.005);
+  EXPECT_NEAR(m.cv.shape.target_mean_s, target.shape_cv.target_mean_s, 0.005);
+  EXPECT_NEAR(m.v.placement.start_mean_s, target.placement_v.start_mean_s, 0.005);
+  EXPECT_NEAR(m.v.placement.target_mean_s, target.placement_v.target_mean_s, 0.005);
+}
+
 TEST(Phasing, DeterministicForASeed) {
   const PhasingModel model;
   const std::vector<Key> keys = SyntheticKeys(50, KeyType::kCV, 0.3);
