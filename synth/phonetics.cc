@@ -187,6 +187,12 @@ std::string PhonetiseOptions::Check() const {
   return "";
 }
 
+std::vector<std::pair<std::string, std::string>> EspeakIpaTable() {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const EspeakEntry& e : kEspeakTable) out.emplace_back(e.espeak, e.ipa);
+  return out;
+}
+
 bool IsEspeakPause(const std::string& espeak_name) {
   return !espeak_name.empty() && espeak_name[0] == '_';
 }

@@ -2,6 +2,7 @@
 // Phonetic front end: French text -> phones with times and audio (libespeak-ng).
 // Shared by the virtual cuer (datasets/) and the synthesizer (synth/).
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/take.h"
@@ -55,6 +56,8 @@ std::vector<LabelTier> UtteranceTiers(const Utterance& utterance);
 std::string EspeakToIpa(const std::string& espeak_name);
 // The same mapping split into phonemes: {} for an unknown name or a pause.
 std::vector<std::string> EspeakToIpaPhones(const std::string& espeak_name);
+// The whole table, in documentation order: (espeak-ng name, IPA).
+std::vector<std::pair<std::string, std::string>> EspeakIpaTable();
 // espeak-ng's pause phonemes ("_", "_:", "_!", "_|", ...).
 bool IsEspeakPause(const std::string& espeak_name);
 

@@ -4,6 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
 #include <random>
 #include <string>
 #include <thread>
@@ -11,6 +15,7 @@
 
 #include "core/error.h"
 #include "synth/cueing.h"
+#include "tests/testing/testing.h"
 
 namespace csw {
 namespace {
@@ -72,6 +77,41 @@ TEST(Phonetics, EspeakTable) {
                            "N", "l", "r", "j", "w", "I", "V", "0", "3:", "aI", "dZ"}) {
     for (const std::string& ipa : EspeakToIpaPhones(name))
       EXPECT_TRUE(IsVowel(ipa) || IsConsonant(ipa)) << name << " -> " << ipa;
+  }
+}
+
+TEST(Phonetics, DocTableMatchesCode) {
+  // docs/phonetics.md lists the table as rows of (`name` | IPA | espeak's IPA) triples.
+  // CSW_SOURCE_DIR does not reach ctest (csw_add_test passes one ENVIRONMENT
+  // entry only), so the source tree comes from a compile definition.
+  std::ifstream in(std::filesystem::path(CSW_SYNTH_SOURCE_DIR) / "docs" / "phonetics.md");
+  ASSERT_TRUE(in) << "docs/phonetics.md not found";
+  std::map<std::string, std::string> documented;
+  std::string line;
+  bool in_table = false;
+  while (std::getline(in, line)) {
+    if (line.rfind("### espeak-ng", 0) == 0) in_table = true;
+    if (line.rfind("Departures", 0) == 0) break;
+    if (!in_table || line.rfind("| `", 0) != 0) continue;
+    std::vector<std::string> cells;
+    std::stringstream ss(line.substr(1));
+    std::string cell;
+    while (std::getline(ss, cell, '|')) {
+      const size_t a = cell.find_first_not_of(' ');
+      const size_t b = cell.find_last_not_of(' ');
+      cells.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
+    }
+    for (size_t i = 0; i + 1 < cells.size(); i += 3) {
+      if (cells[i].size() < 3) continue;
+      documented[cells[i].substr(1, cells[i].size() - 2)] = cells[i + 1];
+    }
+  }
+  const auto table = EspeakIpaTable();
+  EXPECT_EQ(documented.size(), table.size());
+  for (const auto& [name, ipa] : table) {
+    ASSERT_TRUE(documented.count(name)) << name << " missing from docs/phonetics.md";
+    EXPECT_EQ(documented[name], ipa) << name;
+    EXPECT_EQ(EspeakToIpa(name), ipa);
   }
 }
 
