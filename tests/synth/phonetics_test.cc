@@ -256,6 +256,21 @@ TEST(Phonetics, ThreadSafe) {
   }
 }
 
+TEST(Phonetics, FlutterFreeVariantIsBitReproducible) {
+  // The "michel" variant has flutter, roughness and echo 0: same text, same
+  // samples and times, whatever was spoken in between.
+  PhonetiseOptions o;
+  o.voice = "fr+michel";
+  const Utterance a = Phonetise("le petit chat", o);
+  Phonetise("bonjour", o);
+  Phonetise("il fait beau");
+  const Utterance b = Phonetise("le petit chat", o);
+  EXPECT_EQ(SpokenIpa(a), "l ə p ə t i ʃ a");
+  EXPECT_EQ(a.audio.samples, b.audio.samples);
+  ASSERT_EQ(a.phones.size(), b.phones.size());
+  for (size_t i = 0; i < a.phones.size(); ++i) EXPECT_EQ(a.phones[i].start_s, b.phones[i].start_s);
+}
+
 TEST(Phonetics, BadOptions) {
   PhonetiseOptions o;
   o.pitch = 120;
