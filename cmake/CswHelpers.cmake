@@ -25,6 +25,6 @@ function(csw_add_test module name)
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} csw_testing GTest::gtest GTest::gtest_main)
   csw_set_warnings(${target})
-  gtest_discover_tests(${target} TEST_PREFIX "${module}." DISCOVERY_TIMEOUT 60
-    PROPERTIES ENVIRONMENT "CSW_SHARED_DATA=${CSW_SHARED_DATA_DIR};CSW_SOURCE_DIR=${PROJECT_SOURCE_DIR}")
+  # Paths to ../shared/data and the source tree are compiled into csw_testing.
+  gtest_discover_tests(${target} TEST_PREFIX "${module}." DISCOVERY_TIMEOUT 60)
 endfunction()

@@ -9,7 +9,7 @@ namespace fs = std::filesystem;
 
 fs::path SharedDataDir() {
   const char* env = std::getenv("CSW_SHARED_DATA");
-  fs::path p = env ? fs::path(env) : fs::path("../shared/data");
+  fs::path p = env ? fs::path(env) : fs::path(CSW_SHARED_DATA_DEFAULT);
   std::error_code ec;
   if (fs::is_directory(p, ec)) return fs::canonical(p);
   return {};
@@ -25,7 +25,7 @@ fs::path SharedData(const std::string& relative) {
 
 fs::path SourceDir() {
   const char* env = std::getenv("CSW_SOURCE_DIR");
-  return env ? fs::path(env) : fs::current_path();
+  return env ? fs::path(env) : fs::path(CSW_SOURCE_DIR_DEFAULT);
 }
 
 TempDir::TempDir() {
