@@ -27,6 +27,7 @@ struct C3dInfo {
   std::vector<std::string> labels;  // POINT:LABELS, LABELS2.. (trimmed)
   std::vector<std::string> descriptions;
   std::vector<std::string> analog_labels, analog_units;
+  std::vector<std::string> analog_descriptions;  // ANALOG:DESCRIPTIONS (trimmed)
   std::vector<Event> events;    // header events + EVENT group, times in seconds
   std::vector<std::string> warnings;
 };

@@ -347,12 +347,12 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
         section_size = std::min(section_size, (h_data_start - param_block) * c3d::kBlock);
       }
     }
+    std::string cut_note;
     if (h_data_start > param_block && nblocks > 0) {
       // The data start bounds the section: some writers under-declare the block count
       // (sample_13 Dance1.c3d), others let the section overlap the data (sample_18).
       if (h_data_start - param_block < nblocks) {
-        warn("parameter section declares " + std::to_string(nblocks) + " blocks but the data starts at block " +
-             std::to_string(h_data_start) + "; reading parameters up to the data");
+        cut_note = " (the section, declared as " + std::to_string(nblocks) + " blocks, is cut where the data starts)";
       }
       section_size = std::min<int64_t>(h_data_start - param_block, 255) * c3d::kBlock;
     }
@@ -367,7 +367,8 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
     int64_t pos = 4;
     while (true) {
       if (pos + 2 > section_size) {
-        warn("parameter section ends at offset " + std::to_string(param_start + pos) + " without a terminator");
+        warn("parameter section ends at offset " + std::to_string(param_start + pos) + " without a terminator" +
+             cut_note);
         break;
       }
       const int nchar = static_cast<int8_t>(sec[pos]);
@@ -376,7 +377,8 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
       const int64_t len = std::abs(nchar);
       int64_t p = pos + 2;
       if (p + len + 2 > section_size) {
-        warn("parameter entry at offset " + std::to_string(param_start + pos) + " overruns the parameter section");
+        warn("parameter entry at offset " + std::to_string(param_start + pos) + " overruns the parameter section" +
+             cut_note);
         break;
       }
       std::string name(reinterpret_cast<const char*>(sec.data() + p), static_cast<size_t>(len));
@@ -436,7 +438,7 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
       }
       if (!body_ok) {
         warn("parameter entry " + Quote(name) + " at offset " + std::to_string(param_start + pos) +
-             " overruns the parameter section; stopping the parameter scan there");
+             " overruns the parameter section" + cut_note + "; stopping the parameter scan there");
         break;
       }
       if (offset == 0) break;
@@ -569,11 +571,15 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
     }
     info_.analog_labels = StringSeries(table, "ANALOG", "LABELS");
     info_.analog_units = StringSeries(table, "ANALOG", "UNITS");
+    info_.analog_descriptions = StringSeries(table, "ANALOG", "DESCRIPTIONS");
     for (int64_t i = static_cast<int64_t>(info_.analog_labels.size()); i < channels; ++i) {
       info_.analog_labels.push_back("Analog" + std::to_string(i + 1));
     }
     info_.analog_labels.resize(static_cast<size_t>(channels));
     info_.analog_units.resize(static_cast<size_t>(channels));
+    if (static_cast<int64_t>(info_.analog_descriptions.size()) > channels) {
+      info_.analog_descriptions.resize(static_cast<size_t>(channels));
+    }
     std::vector<std::string> format = Strings(table.Find("ANALOG", "FORMAT"));
     analog_unsigned_ = !format.empty() && Upper(format[0]) == "UNSIGNED";
     if (channels > 0) {
@@ -834,6 +840,7 @@ Take ReadC3d(const std::string& path) {
   take.analog.rate_hz = info.analog_rate_hz;
   take.analog.names = info.analog_labels;
   take.analog.units = info.analog_units;
+  take.analog.descriptions = info.analog_descriptions;
   take.analog.samples = info.analog_channels > 0 ? info.frames * info.analog_subframes_per_frame : 0;
   take.analog.data.resize(static_cast<size_t>(take.analog.samples * info.analog_channels));
   reader.ReadFrames(0, info.frames, take.markers.data().data(), nullptr,

@@ -59,6 +59,7 @@ void ExpectSame(const Take& a, const Take& b) {
   EXPECT_EQ(a.analog.channels() > 0 ? a.analog.units : std::vector<std::string>(),
             b.analog.channels() > 0 ? b.analog.units : std::vector<std::string>());
   EXPECT_EQ(a.analog.samples, b.analog.samples);
+  EXPECT_EQ(a.analog.descriptions, b.analog.descriptions);
   if (a.analog.channels() > 0) {
     EXPECT_EQ(a.analog.rate_hz, b.analog.rate_hz);
   }
@@ -75,6 +76,7 @@ void ExpectSame(const Take& a, const Take& b) {
 TEST(C3dRoundTrip, PointsAnalogEventsNaNs) {
   testing::TempDir dir;
   Take t = MakeTake(50, 12, 3, 4);
+  t.analog.descriptions = {"left tibialis", "", "force plate 1 Fz"};
   t.events = {{"Foot Strike", "Left", 0.125, "heel contact"}, {"Foot Off", "Right", 75.5, ""}, {"RIC", "", 2.75, ""}};
   const std::string path = (dir / "rt.c3d").string();
   WriteC3d(path, t);
