@@ -161,6 +161,12 @@ std::vector<std::string> StringSeries(const ParamTable& t, const std::string& gr
 
 std::string Quote(const std::string& s) { return "'" + s + "'"; }
 
+// A parameter value as an integer; float-typed values may be anything (NaN, 1e30).
+int64_t ToInt(double v) {
+  if (!(v == v)) return 0;
+  return static_cast<int64_t>(std::clamp(v, -1e12, 1e12));
+}
+
 // Converts `count` frames of raw bytes. Templated on processor and storage so
 // that the inner loop has no per-sample dispatch.
 struct ConvertArgs {
@@ -488,7 +494,7 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
     // --- points ---
     info_.points = h_points;
     if (auto used = Number(table.Find("POINT", "USED"), proc)) {
-      int64_t u = static_cast<int64_t>(*used) & 0xFFFF;
+      int64_t u = ToInt(*used) & 0xFFFF;
       if (u != h_points) {
         warn("POINT:USED (" + std::to_string(u) + ") differs from the header (" + std::to_string(h_points) +
              "); using the header");
@@ -534,7 +540,7 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
     int64_t subframes = h_subframes;
     analog_words_ = h_analog_words;
     if (analog_used && *analog_used > 0 && subframes > 0) {
-      const int64_t used = static_cast<int64_t>(*analog_used) & 0xFFFF;
+      const int64_t used = ToInt(*analog_used) & 0xFFFF;
       if (used * subframes != h_analog_words && !fits(h_analog_words) && fits(used * subframes)) {
         warn("header analog values per frame (" + std::to_string(h_analog_words) + ") disagrees with ANALOG:USED (" +
              std::to_string(used) + ") x " + std::to_string(subframes) +
@@ -556,7 +562,7 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
     info_.analog_subframes_per_frame = subframes;
     const int64_t channels = info_.analog_channels;
     if (auto used = Number(table.Find("ANALOG", "USED"), proc)) {
-      int64_t u = static_cast<int64_t>(*used) & 0xFFFF;
+      int64_t u = ToInt(*used) & 0xFFFF;
       if (u != channels) {
         warn("ANALOG:USED (" + std::to_string(u) + ") differs from the header (" + std::to_string(channels) +
              " channels); using the header");
@@ -620,7 +626,7 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
     // --- data start and frames ---
     int64_t data_start = h_data_start;
     if (auto ds = Number(table.Find("POINT", "DATA_START"), proc)) {
-      int64_t v = static_cast<int64_t>(*ds) & 0xFFFF;
+      int64_t v = ToInt(*ds) & 0xFFFF;
       if (v != h_data_start) {
         warn("POINT:DATA_START (" + std::to_string(v) + ") differs from the header (" + std::to_string(h_data_start) +
              ")");
@@ -698,7 +704,7 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
       std::vector<double> times = Numbers(p_times, proc);
       int64_t n = static_cast<int64_t>(times.size() / 2);
       if (auto used = Number(table.Find(ev, "USED"), proc)) {
-        int64_t u = static_cast<int64_t>(*used);
+        int64_t u = ToInt(*used);
         if (u < n) n = std::max<int64_t>(u, 0);
         if (u > n) warn("EVENT:USED (" + std::to_string(u) + ") exceeds the " + std::to_string(n) + " stored times");
       }
