@@ -40,7 +40,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   csw::WriteTrc(out, take);
   csw::Take back = csw::ReadTrc(out);
   if (back.rate_hz != take.rate_hz || back.first_frame != take.first_frame ||
-      back.markers.frames() != take.markers.frames() || back.markers.markers() != take.markers.markers()) {
+      back.markers.frames() != take.markers.frames() ||
+      back.markers.markers() != take.markers.markers()) {
     std::abort();
   }
   const auto& a = take.markers.data();

@@ -24,8 +24,8 @@ struct Annotation {
   std::string id;
   size_t tier = 0;
   bool alignable = true;
-  std::string slot1, slot2;    // alignable
-  std::string ref, previous;   // reference
+  std::string slot1, slot2;   // alignable
+  std::string ref, previous;  // reference
   std::string value;
   int64_t offset = 0;
   // Resolution.
@@ -60,10 +60,11 @@ class EafReader {
 
   std::vector<LabelTier> Read() {
     bytes_ = formats_internal::ReadFileBytes(path_);
-    if (bytes_.empty()) throw ParseError({path_, 0, std::nullopt}, "file is empty; not an EAF file");
+    if (bytes_.empty())
+      throw ParseError({path_, 0, std::nullopt}, "file is empty; not an EAF file");
     pugi::xml_document doc;
-    pugi::xml_parse_result result =
-        doc.load_buffer(bytes_.data(), bytes_.size(), pugi::parse_default | pugi::parse_ws_pcdata_single);
+    pugi::xml_parse_result result = doc.load_buffer(
+        bytes_.data(), bytes_.size(), pugi::parse_default | pugi::parse_ws_pcdata_single);
     if (!result) {
       throw ParseError(At(result.offset), std::string("malformed XML: ") + result.description());
     }
@@ -178,7 +179,8 @@ class EafReader {
       }
       const int64_t limit = static_cast<int64_t>(tier.annotations.size()) + 1;
       std::unordered_map<std::string, Reach> back_memo, fwd_memo;
-      auto walk = [&](const std::string& start, const std::unordered_map<std::string, std::string>& dir,
+      auto walk = [&](const std::string& start,
+                      const std::unordered_map<std::string, std::string>& dir,
                       std::unordered_map<std::string, Reach>& memo) -> Reach {
         std::vector<const std::string*> path;
         const std::string* cur = &start;
@@ -214,7 +216,8 @@ class EafReader {
           *why = "unaligned time slot '" + slot + "' has no aligned slot on both sides in its tier";
           return std::nullopt;
         }
-        const double frac = static_cast<double>(back.second) / static_cast<double>(back.second + fwd.second);
+        const double frac =
+            static_cast<double>(back.second) / static_cast<double>(back.second + fwd.second);
         return back.first + (fwd.first - back.first) * frac;
       };
       for (size_t idx : tier.annotations) {
@@ -258,8 +261,10 @@ class EafReader {
         std::vector<size_t> chain = OrderByPrevious(members);
         if (chain.size() != members.size()) {
           if (!warned) {
-            Warn("EAF: tier '" + tier.name + "': PREVIOUS_ANNOTATION links do not order the "
-                 "annotations under '" + parent + "'; file order used");
+            Warn("EAF: tier '" + tier.name +
+                 "': PREVIOUS_ANNOTATION links do not order the "
+                 "annotations under '" +
+                 parent + "'; file order used");
             warned = true;
           }
           chain = members;
@@ -393,7 +398,8 @@ std::string NowIso8601() {
 
 std::string MimeTypeFor(const std::string& url) {
   std::string ext = std::filesystem::path(url).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   if (ext == ".wav") return "audio/x-wav";
   if (ext == ".mp3") return "audio/mpeg";
   if (ext == ".mp4") return "video/mp4";
@@ -409,7 +415,8 @@ std::vector<LabelTier> ReadEaf(const std::string& path, std::vector<std::string>
   return reader.Read();
 }
 
-void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers, const std::string& media_url) {
+void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers,
+              const std::string& media_url) {
   struct Slot {
     int64_t ms;
     size_t order;
@@ -427,7 +434,8 @@ void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers, cons
     size_t previous_end_slot = 0;
     for (const Label& l : tiers[t].labels) {
       if (!std::isfinite(l.start_s) || !std::isfinite(l.end_s) || l.start_s < 0 || l.end_s < 0) {
-        throw InvalidInput("WriteEaf: tier \"" + tiers[t].name + "\" has a negative or non-finite time");
+        throw InvalidInput("WriteEaf: tier \"" + tiers[t].name +
+                           "\" has a negative or non-finite time");
       }
       if (l.start_s > l.end_s) {
         throw InvalidInput("WriteEaf: tier \"" + tiers[t].name + "\" has a label with start > end");
@@ -470,7 +478,8 @@ void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers, cons
   root.append_attribute("FORMAT") = "3.0";
   root.append_attribute("VERSION") = "3.0";
   root.append_attribute("xmlns:xsi") = "http://www.w3.org/2001/XMLSchema-instance";
-  root.append_attribute("xsi:noNamespaceSchemaLocation") = "http://www.mpi.nl/tools/elan/EAFv3.0.xsd";
+  root.append_attribute("xsi:noNamespaceSchemaLocation") =
+      "http://www.mpi.nl/tools/elan/EAFv3.0.xsd";
   pugi::xml_node header = root.append_child("HEADER");
   header.append_attribute("MEDIA_FILE") = "";
   header.append_attribute("TIME_UNITS") = "milliseconds";

@@ -27,9 +27,9 @@ std::string ReadFileBytes(const std::string& path, int64_t max_bytes) {
   const std::streamoff size = in.tellg();
   if (size < 0) throw IoError(path, "cannot determine the file size");
   if (size > max_bytes) {
-    throw ParseError({path, max_bytes, std::nullopt},
-                     "file is too large (" + std::to_string(size) + " bytes; limit " +
-                         std::to_string(max_bytes) + ")");
+    throw ParseError({path, max_bytes, std::nullopt}, "file is too large (" + std::to_string(size) +
+                                                          " bytes; limit " +
+                                                          std::to_string(max_bytes) + ")");
   }
   in.seekg(0, std::ios::beg);
   std::string bytes(static_cast<size_t>(size), '\0');
@@ -39,11 +39,16 @@ std::string ReadFileBytes(const std::string& path, int64_t max_bytes) {
 
 const char* EncodingName(TextEncoding encoding) {
   switch (encoding) {
-    case TextEncoding::kUtf8: return "UTF-8";
-    case TextEncoding::kUtf8Bom: return "UTF-8 with BOM";
-    case TextEncoding::kUtf16Le: return "UTF-16LE";
-    case TextEncoding::kUtf16Be: return "UTF-16BE";
-    case TextEncoding::kLatin1: return "Latin-1";
+    case TextEncoding::kUtf8:
+      return "UTF-8";
+    case TextEncoding::kUtf8Bom:
+      return "UTF-8 with BOM";
+    case TextEncoding::kUtf16Le:
+      return "UTF-16LE";
+    case TextEncoding::kUtf16Be:
+      return "UTF-16BE";
+    case TextEncoding::kLatin1:
+      return "Latin-1";
   }
   return "?";
 }
@@ -195,7 +200,8 @@ std::optional<double> ParseFiniteDouble(std::string_view token) {
   if (token.empty()) return std::nullopt;
   // from_chars would accept "inf"/"nan"; only digits, '.', '-' may start a number here.
   const char c0 = token.front();
-  if (!(std::isdigit(static_cast<unsigned char>(c0)) || c0 == '.' || c0 == '-')) return std::nullopt;
+  if (!(std::isdigit(static_cast<unsigned char>(c0)) || c0 == '.' || c0 == '-'))
+    return std::nullopt;
   double value = 0.0;
   const char* end = token.data() + token.size();
   auto [ptr, ec] = std::from_chars(token.data(), end, value, std::chars_format::general);

@@ -136,7 +136,8 @@ class Lexer {
 
 class TextGridParser {
  public:
-  TextGridParser(std::string_view text, const std::string& path) : lexer_(text, path), path_(path) {}
+  TextGridParser(std::string_view text, const std::string& path)
+      : lexer_(text, path), path_(path) {}
 
   std::vector<LabelTier> Parse(double* xmin_out, double* xmax_out) {
     Token tok = lexer_.Next();
@@ -146,13 +147,14 @@ class TextGridParser {
     }
     std::string object_class = ExpectString("the object class");
     if (object_class.rfind("TextGrid", 0) != 0) {
-      throw Error(last_line_, "object class is \"" + object_class.substr(0, 40) +
-                                  "\", not \"TextGrid\"");
+      throw Error(last_line_,
+                  "object class is \"" + object_class.substr(0, 40) + "\", not \"TextGrid\"");
     }
     const double xmin = ExpectNumber("the TextGrid xmin");
     const double xmax = ExpectNumber("the TextGrid xmax");
     if (xmin > xmax) {
-      throw Error(last_line_, "TextGrid xmin " + FormatDouble(xmin) + " > xmax " + FormatDouble(xmax));
+      throw Error(last_line_,
+                  "TextGrid xmin " + FormatDouble(xmin) + " > xmax " + FormatDouble(xmax));
     }
     if (xmin_out) *xmin_out = xmin;
     if (xmax_out) *xmax_out = xmax;
@@ -182,11 +184,12 @@ class TextGridParser {
       tier.end_s = ExpectNumber("the tier xmax");
       if (tier.start_s > tier.end_s) {
         throw Error(last_line_, "tier \"" + tier.name.substr(0, 40) + "\": xmin " +
-                                    FormatDouble(tier.start_s) + " > xmax " + FormatDouble(tier.end_s));
+                                    FormatDouble(tier.start_s) + " > xmax " +
+                                    FormatDouble(tier.end_s));
       }
       const bool intervals = tier.kind == LabelTier::Kind::kInterval;
-      const int64_t count = ExpectCount(intervals ? "the interval count" : "the point count",
-                                        intervals ? 6 : 4);
+      const int64_t count =
+          ExpectCount(intervals ? "the interval count" : "the point count", intervals ? 6 : 4);
       tier.labels.reserve(static_cast<size_t>(count));
       for (int64_t i = 0; i < count; ++i) {
         Label label;
@@ -195,8 +198,9 @@ class TextGridParser {
           label.end_s = ExpectNumber("an interval xmax");
           if (label.start_s > label.end_s) {
             throw Error(last_line_, "tier \"" + tier.name.substr(0, 40) + "\", interval " +
-                                        std::to_string(i + 1) + ": xmin " + FormatDouble(label.start_s) +
-                                        " > xmax " + FormatDouble(label.end_s));
+                                        std::to_string(i + 1) + ": xmin " +
+                                        FormatDouble(label.start_s) + " > xmax " +
+                                        FormatDouble(label.end_s));
           }
           label.text = ExpectString("an interval text");
         } else {
@@ -216,10 +220,14 @@ class TextGridParser {
   }
   static std::string Describe(const Token& tok) {
     switch (tok.kind) {
-      case Token::Kind::kEnd: return "the end of the file";
-      case Token::Kind::kNumber: return "the number " + tok.text.substr(0, 40);
-      case Token::Kind::kString: return "the string \"" + tok.text.substr(0, 40) + "\"";
-      case Token::Kind::kFlag: return "the flag " + tok.text.substr(0, 40);
+      case Token::Kind::kEnd:
+        return "the end of the file";
+      case Token::Kind::kNumber:
+        return "the number " + tok.text.substr(0, 40);
+      case Token::Kind::kString:
+        return "the string \"" + tok.text.substr(0, 40) + "\"";
+      case Token::Kind::kFlag:
+        return "the flag " + tok.text.substr(0, 40);
     }
     return "?";
   }
@@ -281,8 +289,9 @@ std::vector<LabelTier> ReadTextGrid(const std::string& path, double* xmin, doubl
   const std::string bytes = formats_internal::ReadFileBytes(path);
   if (bytes.empty()) throw ParseError({path, 0, std::nullopt}, "file is empty; not a TextGrid");
   if (bytes.rfind("ooBinaryFile", 0) == 0) {
-    throw ParseError({path, 0, std::nullopt}, "binary TextGrid files are not supported; save "
-                                               "it from Praat as a text file");
+    throw ParseError({path, 0, std::nullopt},
+                     "binary TextGrid files are not supported; save "
+                     "it from Praat as a text file");
   }
   const std::string text = formats_internal::DecodeText(bytes, path);
   TextGridParser parser(text, path);
@@ -329,13 +338,15 @@ void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers,
     }
     CheckFinite(tier_start, "tier \"" + tier.name + "\" start");
     CheckFinite(tier_end, "tier \"" + tier.name + "\" end");
-    if (tier_start > tier_end) throw InvalidInput("WriteTextGrid: tier \"" + tier.name + "\" start > end");
+    if (tier_start > tier_end)
+      throw InvalidInput("WriteTextGrid: tier \"" + tier.name + "\" start > end");
     const bool intervals = tier.kind == LabelTier::Kind::kInterval;
     for (const Label& l : tier.labels) {
       CheckFinite(l.start_s, "a label time in tier \"" + tier.name + "\"");
       CheckFinite(l.end_s, "a label time in tier \"" + tier.name + "\"");
       if (intervals && l.start_s > l.end_s) {
-        throw InvalidInput("WriteTextGrid: tier \"" + tier.name + "\" has a label with start > end");
+        throw InvalidInput("WriteTextGrid: tier \"" + tier.name +
+                           "\" has a label with start > end");
       }
     }
     const std::vector<Label>& labels = tier.labels;

@@ -158,13 +158,16 @@ Take ReadTrc(const std::string& path) {
     if (it == header.end()) return std::nullopt;
     return ParseFiniteDouble(it->second);
   };
-  auto plausible = [](std::optional<double> r) { return r && *r >= kMinRateHz && *r <= kMaxRateHz; };
+  auto plausible = [](std::optional<double> r) {
+    return r && *r >= kMinRateHz && *r <= kMaxRateHz;
+  };
   std::optional<double> rate = header_number("DataRate");
   if (!plausible(rate)) {
     std::optional<double> camera = header_number("CameraRate");
     if (!plausible(camera)) {
-      throw error(3, "no valid DataRate or CameraRate in the header (a number between 1e-6 and "
-                     "1e7 Hz is required)");
+      throw error(3,
+                  "no valid DataRate or CameraRate in the header (a number between 1e-6 and "
+                  "1e7 Hz is required)");
     }
     warnings.push_back("TRC header: DataRate missing or invalid; CameraRate " +
                        formats_internal::FormatDouble(*camera) + " Hz used");
@@ -242,7 +245,8 @@ Take ReadTrc(const std::string& path) {
     int64_t frame = 0;
     if (auto f = ParseInt(frame_field)) {
       frame = *f;
-    } else if (auto d = ParseFiniteDouble(frame_field); d && *d == std::floor(*d) && std::abs(*d) < 1e15) {
+    } else if (auto d = ParseFiniteDouble(frame_field);
+               d && *d == std::floor(*d) && std::abs(*d) < 1e15) {
       frame = static_cast<int64_t>(*d);
     } else {
       throw error(ln, "column 1: frame number expected, found '" +
@@ -312,8 +316,7 @@ Take ReadTrc(const std::string& path) {
   const int64_t markers = std::max<int64_t>(static_cast<int64_t>(names.size()), widest_row);
   // Every stored sample needs at least a separator in the file; refuse tables
   // that would be far larger than anything the file can describe.
-  if (frames > 0 && markers > 0 &&
-      frames * markers * 3 > 8 * file_size + 3 * 4096) {
+  if (frames > 0 && markers > 0 && frames * markers * 3 > 8 * file_size + 3 * 4096) {
     throw error(widest_line > 0 ? widest_line : 4,
                 "table of " + std::to_string(frames) + " frames x " + std::to_string(markers) +
                     " markers is too large for a " + std::to_string(file_size) + "-byte file");
@@ -395,15 +398,18 @@ void WriteTrc(const std::string& path, const Take& take) {
   std::string out;
   out.reserve(static_cast<size_t>(256 + markers * 40 + frames * (16 + markers * 30)));
   out += "PathFileType\t4\t(X/Y/Z)\t" + std::filesystem::path(path).filename().string() + "\n";
-  out += "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame"
-         "\tOrigNumFrames\n";
+  out +=
+      "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame"
+      "\tOrigNumFrames\n";
   out += rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) +
-         "\tmm\t" + rate + "\t" + std::to_string(take.first_frame) + "\t" +
-         std::to_string(frames) + "\n";
+         "\tmm\t" + rate + "\t" + std::to_string(take.first_frame) + "\t" + std::to_string(frames) +
+         "\n";
   out += "Frame#\tTime";
   for (const std::string& name : take.marker_names) {
     std::string clean(Trim(name));
-    std::replace_if(clean.begin(), clean.end(), [](char c) { return c == '\t' || c == '\n' || c == '\r'; }, ' ');
+    std::replace_if(
+        clean.begin(), clean.end(), [](char c) { return c == '\t' || c == '\n' || c == '\r'; },
+        ' ');
     out += "\t" + clean + "\t\t";
   }
   out += "\n\t";

@@ -42,7 +42,8 @@ TEST_P(EafSample, TiersCountsAndTimes) {
   auto tiers = ReadEaf(SharedData(rel).string(), &warnings);
   EXPECT_TRUE(warnings.empty()) << warnings.front();
   ASSERT_EQ(tiers.size(), 6u);
-  const char* names[] = {"text", "words-timesub", "words-symsub", "gestures", "gest_included", "words-pos"};
+  const char* names[] = {"text",     "words-timesub", "words-symsub",
+                         "gestures", "gest_included", "words-pos"};
   const size_t counts[] = {399, 1995, 1995, 1197, 1197, 1995};
   for (size_t i = 0; i < 6; ++i) {
     EXPECT_EQ(tiers[i].name, names[i]);
@@ -50,8 +51,9 @@ TEST_P(EafSample, TiersCountsAndTimes) {
     EXPECT_EQ(tiers[i].kind, LabelTier::Kind::kInterval);
     EXPECT_EQ(tiers[i].start_s, 0.0);
     EXPECT_EQ(tiers[i].end_s, 1199.0);  // largest TIME_VALUE is 1199000 ms
-    EXPECT_TRUE(std::is_sorted(tiers[i].labels.begin(), tiers[i].labels.end(),
-                               [](const Label& a, const Label& b) { return a.start_s < b.start_s; }));
+    EXPECT_TRUE(
+        std::is_sorted(tiers[i].labels.begin(), tiers[i].labels.end(),
+                       [](const Label& a, const Label& b) { return a.start_s < b.start_s; }));
   }
   // text a1: ts2 (2000) .. ts19 (5000).
   ExpectLabel(tiers[0].labels[0], 2.0, 5.0, "The quick brown fox 001");
@@ -111,7 +113,10 @@ TEST(EafRoundTrip, SampleWriteReadKeepsNonEmptyLabels) {
 }
 
 TEST(EafRoundTrip, MillisecondTiersAreExact) {
-  LabelTier words{"words", LabelTier::Kind::kInterval, 0, 3,
+  LabelTier words{"words",
+                  LabelTier::Kind::kInterval,
+                  0,
+                  3,
                   {{0.1, 0.25, "a<b & \"c\""}, {0.25, 0.9, "\xC3\xA9t\xC3\xA9"}, {1.5, 2.0, "x"}}};
   LabelTier points{"keys", LabelTier::Kind::kPoint, 0, 3, {{0.5, 0.5, "k1"}, {1.25, 1.25, "k2"}}};
   LabelTier dup = words;
@@ -139,7 +144,9 @@ TEST(EafRoundTrip, MillisecondTiersAreExact) {
   const std::string xml = ReadBytes(out);
   EXPECT_EQ(std::count(xml.begin(), xml.end(), '\n') > 0, true);
   size_t slots = 0;
-  for (size_t p = xml.find("<TIME_SLOT "); p != std::string::npos; p = xml.find("<TIME_SLOT ", p + 1)) ++slots;
+  for (size_t p = xml.find("<TIME_SLOT "); p != std::string::npos;
+       p = xml.find("<TIME_SLOT ", p + 1))
+    ++slots;
   EXPECT_EQ(slots, 11u);
 }
 
@@ -153,15 +160,18 @@ TEST(EafWrite, RejectsBadTimes) {
 
 std::string Doc(const std::string& slots, const std::string& tiers) {
   return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<ANNOTATION_DOCUMENT FORMAT=\"3.0\">\n"
-         "<HEADER TIME_UNITS=\"milliseconds\"/>\n<TIME_ORDER>\n" + slots + "</TIME_ORDER>\n" + tiers +
-         "</ANNOTATION_DOCUMENT>\n";
+         "<HEADER TIME_UNITS=\"milliseconds\"/>\n<TIME_ORDER>\n" +
+         slots + "</TIME_ORDER>\n" + tiers + "</ANNOTATION_DOCUMENT>\n";
 }
 std::string Slot(const std::string& id, const std::string& value) {
-  return "<TIME_SLOT TIME_SLOT_ID=\"" + id + "\"" + (value.empty() ? "" : " TIME_VALUE=\"" + value + "\"") + "/>\n";
+  return "<TIME_SLOT TIME_SLOT_ID=\"" + id + "\"" +
+         (value.empty() ? "" : " TIME_VALUE=\"" + value + "\"") + "/>\n";
 }
-std::string Aligned(const std::string& id, const std::string& s1, const std::string& s2, const std::string& v) {
+std::string Aligned(const std::string& id, const std::string& s1, const std::string& s2,
+                    const std::string& v) {
   return "<ANNOTATION><ALIGNABLE_ANNOTATION ANNOTATION_ID=\"" + id + "\" TIME_SLOT_REF1=\"" + s1 +
-         "\" TIME_SLOT_REF2=\"" + s2 + "\"><ANNOTATION_VALUE>" + v + "</ANNOTATION_VALUE></ALIGNABLE_ANNOTATION></ANNOTATION>\n";
+         "\" TIME_SLOT_REF2=\"" + s2 + "\"><ANNOTATION_VALUE>" + v +
+         "</ANNOTATION_VALUE></ALIGNABLE_ANNOTATION></ANNOTATION>\n";
 }
 std::string Ref(const std::string& id, const std::string& parent, const std::string& v) {
   return "<ANNOTATION><REF_ANNOTATION ANNOTATION_ID=\"" + id + "\" ANNOTATION_REF=\"" + parent +
@@ -201,8 +211,10 @@ TEST(EafRead, HostileInputsGiveOneParseErrorWithOffset) {
   for (const std::string& content :
        {std::string("not xml at all"), std::string(""), std::string("<A><B></A>"),
         std::string("<?xml version=\"1.0\"?><TEXTGRID/>"),
-        Doc(Slot("t1", "nan") + Slot("t2", "10"), ok_tier), Doc(Slot("t1", "-5") + Slot("t2", "10"), ok_tier),
-        Doc(Slot("t1", "1e999") + Slot("t2", "10"), ok_tier), Doc(Slot("t1", "inf") + Slot("t2", "10"), ok_tier),
+        Doc(Slot("t1", "nan") + Slot("t2", "10"), ok_tier),
+        Doc(Slot("t1", "-5") + Slot("t2", "10"), ok_tier),
+        Doc(Slot("t1", "1e999") + Slot("t2", "10"), ok_tier),
+        Doc(Slot("t1", "inf") + Slot("t2", "10"), ok_tier),
         Doc(Slot("t1", "0") + Slot("t2", "10"), Tier("t", Aligned("a1", "t1", "t9", "v"))),
         Doc(Slot("t1", "500") + Slot("t2", "10"), ok_tier)}) {
     WriteBytes(path, content);

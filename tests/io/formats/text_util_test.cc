@@ -41,10 +41,10 @@ TEST(Utf16, BrokenInputNamesTheOffset) {
     }
     return -100;
   };
-  EXPECT_EQ(offset_of(std::string("\x41\x00\x42", 3), false), 4);           // odd length: last byte
-  EXPECT_EQ(offset_of(std::string("\x41\x00\x00\xDC", 4), false), 4);       // lone low surrogate
-  EXPECT_EQ(offset_of(std::string("\x3D\xD8\x41\x00", 4), false), 2);       // high + non-low
-  EXPECT_EQ(offset_of(std::string("\x41\x00\x3D\xD8", 4), false), 4);       // high at the end
+  EXPECT_EQ(offset_of(std::string("\x41\x00\x42", 3), false), 4);      // odd length: last byte
+  EXPECT_EQ(offset_of(std::string("\x41\x00\x00\xDC", 4), false), 4);  // lone low surrogate
+  EXPECT_EQ(offset_of(std::string("\x3D\xD8\x41\x00", 4), false), 2);  // high + non-low
+  EXPECT_EQ(offset_of(std::string("\x41\x00\x3D\xD8", 4), false), 4);  // high at the end
 }
 
 TEST(Utf8, ValidationAndLatin1Fallback) {
@@ -67,7 +67,8 @@ TEST(Numbers, ParseOnlyFiniteWholeTokens) {
   EXPECT_EQ(ParseFiniteDouble(".5"), 0.5);
   EXPECT_EQ(ParseFiniteDouble("-1e-3"), -0.001);
   EXPECT_TRUE(std::signbit(*ParseFiniteDouble("-0")));
-  for (const char* bad : {"", "+", "nan", "NaN", "inf", "-inf", "1e999", "0x10", "1.5x", " 1", "1,5", "--1"}) {
+  for (const char* bad :
+       {"", "+", "nan", "NaN", "inf", "-inf", "1e999", "0x10", "1.5x", " 1", "1,5", "--1"}) {
     EXPECT_FALSE(ParseFiniteDouble(bad).has_value()) << bad;
   }
   EXPECT_EQ(ParseInt("+42"), 42);

@@ -85,7 +85,8 @@ TEST(TextGridRead, MaryLongUtf16BeEqualsShortUtf8) {
 
 TEST(TextGridRead, NegativeZeroReadsAsZero) {
   CSW_REQUIRE_SHARED_DATA("textgrid/praatio/mary_with_negative_zero.TextGrid");
-  for (const char* name : {"mary_with_negative_zero.TextGrid", "mary_longfile_with_negative_zero.TextGrid"}) {
+  for (const char* name :
+       {"mary_with_negative_zero.TextGrid", "mary_longfile_with_negative_zero.TextGrid"}) {
     double xmin = 1;
     auto tiers = ReadTextGrid(Praatio(name), &xmin);
     EXPECT_EQ(xmin, 0.0);
@@ -125,7 +126,8 @@ TEST(TextGridRead, WordsWithNewlinesAndEscapedQuotes) {
   EXPECT_EQ(tiers[2].name, "");
   EXPECT_EQ(tiers[2].kind, LabelTier::Kind::kPoint);
   ASSERT_EQ(tiers[2].labels.size(), 4u);
-  ExpectLabel(tiers[2].labels[0], 0.23290458517889742, 0.23290458517889742, "133\n\"\"\"p1\"\"\"\np1");
+  ExpectLabel(tiers[2].labels[0], 0.23290458517889742, 0.23290458517889742,
+              "133\n\"\"\"p1\"\"\"\np1");
   ExpectLabel(tiers[2].labels[1], 0.5304541883551366, 0.5304541883551366, "0\np2");
 }
 
@@ -181,12 +183,18 @@ TEST(TextGridRead, SameNameTiersAndMergeFile) {
   ExpectLabel(merge[0].labels[1], 0.7363043110515426, 1.559821858449687, "01a");
 }
 
-const char* const kAllFiles[] = {
-    "all_tiers_have_the_same_name.TextGrid", "bobby_phones_elan.TextGrid",
-    "bobby_words_with_newlines.TextGrid", "bobby_words_with_newlines_longfile.TextGrid",
-    "bobby_words_with_newlines_longfile_elan.TextGrid", "mary.TextGrid", "mary_longfile.TextGrid",
-    "mary_longfile_with_negative_zero.TextGrid", "mary_with_constrained_tier_times.TextGrid",
-    "mary_with_negative_zero.TextGrid", "textgrid_to_merge.TextGrid", "textgrid_to_merge_longfile.TextGrid"};
+const char* const kAllFiles[] = {"all_tiers_have_the_same_name.TextGrid",
+                                 "bobby_phones_elan.TextGrid",
+                                 "bobby_words_with_newlines.TextGrid",
+                                 "bobby_words_with_newlines_longfile.TextGrid",
+                                 "bobby_words_with_newlines_longfile_elan.TextGrid",
+                                 "mary.TextGrid",
+                                 "mary_longfile.TextGrid",
+                                 "mary_longfile_with_negative_zero.TextGrid",
+                                 "mary_with_constrained_tier_times.TextGrid",
+                                 "mary_with_negative_zero.TextGrid",
+                                 "textgrid_to_merge.TextGrid",
+                                 "textgrid_to_merge_longfile.TextGrid"};
 
 TEST(TextGridRoundTrip, EveryPraatioFileBothFormats) {
   TempDir dir;
@@ -212,7 +220,8 @@ TEST(TextGridRoundTrip, EveryPraatioFileBothFormats) {
 
 TEST(TextGridWrite, LongFormatLayoutMatchesPraat) {
   TempDir dir;
-  LabelTier words{"words", LabelTier::Kind::kInterval, 0, 1, {{0, 0.5, "say \"hi\""}, {0.5, 1, ""}}};
+  LabelTier words{
+      "words", LabelTier::Kind::kInterval, 0, 1, {{0, 0.5, "say \"hi\""}, {0.5, 1, ""}}};
   LabelTier marks{"marks", LabelTier::Kind::kPoint, 0, 1, {{0.25, 0.25, "p"}}};
   const std::string out = (dir / "w.TextGrid").string();
   WriteTextGrid(out, {words, marks}, 0, 1);
@@ -223,7 +232,8 @@ TEST(TextGridWrite, LongFormatLayoutMatchesPraat) {
       "        xmin = 0 \n        xmax = 1 \n        intervals: size = 2 \n"
       "        intervals [1]:\n            xmin = 0 \n            xmax = 0.5 \n"
       "            text = \"say \"\"hi\"\"\" \n"
-      "        intervals [2]:\n            xmin = 0.5 \n            xmax = 1 \n            text = \"\" \n"
+      "        intervals [2]:\n            xmin = 0.5 \n            xmax = 1 \n            text = "
+      "\"\" \n"
       "    item [2]:\n        class = \"TextTier\" \n        name = \"marks\" \n"
       "        xmin = 0 \n        xmax = 1 \n        points: size = 1 \n"
       "        points [1]:\n            number = 0.25 \n            mark = \"p\" \n";
@@ -271,10 +281,19 @@ std::string ToUtf16(const std::string& utf8, bool big_endian) {
     auto c = static_cast<unsigned char>(utf8[i]);
     uint32_t cp;
     int len;
-    if (c < 0x80) { cp = c; len = 1; }
-    else if (c < 0xE0) { cp = c & 0x1F; len = 2; }
-    else if (c < 0xF0) { cp = c & 0x0F; len = 3; }
-    else { cp = c & 0x07; len = 4; }
+    if (c < 0x80) {
+      cp = c;
+      len = 1;
+    } else if (c < 0xE0) {
+      cp = c & 0x1F;
+      len = 2;
+    } else if (c < 0xF0) {
+      cp = c & 0x0F;
+      len = 3;
+    } else {
+      cp = c & 0x07;
+      len = 4;
+    }
     for (int k = 1; k < len; ++k) cp = (cp << 6) | (static_cast<unsigned char>(utf8[i + k]) & 0x3F);
     i += static_cast<size_t>(len);
     if (cp >= 0x10000) {
@@ -290,7 +309,10 @@ std::string ToUtf16(const std::string& utf8, bool big_endian) {
 TEST(TextGridRead, Utf16LeAndBeWithSurrogatePairs) {
   TempDir dir;
   // "cued ✋ 😀 é" : BMP and astral characters.
-  LabelTier t{"hand \xE2\x9C\x8B", LabelTier::Kind::kInterval, 0, 2,
+  LabelTier t{"hand \xE2\x9C\x8B",
+              LabelTier::Kind::kInterval,
+              0,
+              2,
               {{0, 1, "\xF0\x9F\x98\x80 smile"}, {1, 2, "caf\xC3\xA9\nline2"}}};
   const std::string utf8_path = (dir / "u8.TextGrid").string();
   WriteTextGrid(utf8_path, {t}, 0, 2);
@@ -345,8 +367,9 @@ TEST(TextGridRead, HostileInputsGiveOneParseErrorWithLine) {
     ExpectParseError([&] { ReadTextGrid(path); }, path, c.line);
   }
   // Binary and broken UTF-16 are reported with an offset.
-  for (const std::string& bytes : {std::string("ooBinaryFile\x08TextGrid", 21), std::string("\xFF\xFE\x41\x00\x42", 5),
-                                   std::string("\xFE\xFF\xDC\x00\x00\x41", 6), std::string("", 0)}) {
+  for (const std::string& bytes :
+       {std::string("ooBinaryFile\x08TextGrid", 21), std::string("\xFF\xFE\x41\x00\x42", 5),
+        std::string("\xFE\xFF\xDC\x00\x00\x41", 6), std::string("", 0)}) {
     WriteBytes(path, bytes);
     ExpectParseError([&] { ReadTextGrid(path); }, path);
   }

@@ -91,8 +91,8 @@ TEST(TrcRead, KneeLabelWithSpacesAndOcclusion) {
   EXPECT_EQ(take.rate_hz, 200.0);
   EXPECT_EQ(take.frames(), 200);
   EXPECT_EQ(take.markers.markers(), 71);
-  EXPECT_EQ(take.marker_names[0], "genou1_ NewMarker");   // inner space kept
-  EXPECT_EQ(take.marker_names[3], "genou1_NewMarker3");   // " genou1_NewMarker3 " trimmed
+  EXPECT_EQ(take.marker_names[0], "genou1_ NewMarker");  // inner space kept
+  EXPECT_EQ(take.marker_names[3], "genou1_NewMarker3");  // " genou1_NewMarker3 " trimmed
   // Line 90 (frame 84): marker 1 = 301.65476 84.11798 132.86554.
   ExpectMarker(take, 83, 1, 301.65476, 84.11798, 132.86554);
   // Line 89: the last marker's cells are empty.
@@ -209,10 +209,10 @@ TEST(TrcRead, MissingFileIsIoError) {
 TEST(TrcRoundTrip, EveryBtkSample) {
   TempDir dir;
   int read = 0;
-  for (const char* name : {"10002-20130626160334-Unnamed.trc", "10002-20130731010438-Unnamed.trc",
-                           "Anto.trc", "Gait.trc", "Knee.trc", "Res16bits.trc", "SprintCalib.trc",
-                           "SprintMotion.trc", "UpperLimbStatic.trc", "MOTEK/T.trc",
-                           "MOTEK/ballet_reduced.trc"}) {
+  for (const char* name :
+       {"10002-20130626160334-Unnamed.trc", "10002-20130731010438-Unnamed.trc", "Anto.trc",
+        "Gait.trc", "Knee.trc", "Res16bits.trc", "SprintCalib.trc", "SprintMotion.trc",
+        "UpperLimbStatic.trc", "MOTEK/T.trc", "MOTEK/ballet_reduced.trc"}) {
     if (SharedData(std::string(kBtk) + name).empty()) continue;
     Take a = ReadBtk(name);
     const std::string out = (dir / "rt.trc").string();
@@ -264,18 +264,21 @@ TEST(TrcWrite, RejectsInconsistentTakes) {
 
 // --- Synthetic files with known content --------------------------------------
 
-std::string Header(const std::string& units, int frames, int markers, const std::string& rate = "100.00") {
+std::string Header(const std::string& units, int frames, int markers,
+                   const std::string& rate = "100.00") {
   return "PathFileType\t4\t(X/Y/Z)\tx.trc\n"
-         "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames\n" +
-         rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) + "\t" + units +
-         "\t" + rate + "\t1\t" + std::to_string(frames) + "\n";
+         "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOri"
+         "gNumFrames\n" +
+         rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) +
+         "\t" + units + "\t" + rate + "\t1\t" + std::to_string(frames) + "\n";
 }
 
 TEST(TrcRead, UnitsAreConvertedToMillimetres) {
   TempDir dir;
   const std::string path = (dir / "m.trc").string();
-  WriteBytes(path, Header("m", 2, 1) + "Frame#\tTime\tA\t\t\n\t\tX1\tY1\tZ1\n\n"
-                                       "5\t0.00\t0.1\t-0.25\t2\n6\t0.01\t\t\t\n");
+  WriteBytes(path, Header("m", 2, 1) +
+                       "Frame#\tTime\tA\t\t\n\t\tX1\tY1\tZ1\n\n"
+                       "5\t0.00\t0.1\t-0.25\t2\n6\t0.01\t\t\t\n");
   Take take = ReadTrc(path);
   EXPECT_EQ(take.source_units, "m");
   EXPECT_EQ(take.first_frame, 5);
@@ -287,10 +290,11 @@ TEST(TrcRead, UnitsAreConvertedToMillimetres) {
 TEST(TrcRead, PartialAndNanCellsAreMissing) {
   TempDir dir;
   const std::string path = (dir / "p.trc").string();
-  WriteBytes(path, Header("mm", 3, 2) + "Frame#\tTime\tA\t\t\tB\t\t\n\t\tX1\tY1\tZ1\tX2\tY2\tZ2\n"
-                                        "1\t0\t1\t2\t\t4\t5\t6\n"
-                                        "2\t0.01\tNaN\tNaN\tNaN\t7\t8\t9\n"
-                                        "3\t0.02\t1\t1\t1\n");
+  WriteBytes(path, Header("mm", 3, 2) +
+                       "Frame#\tTime\tA\t\t\tB\t\t\n\t\tX1\tY1\tZ1\tX2\tY2\tZ2\n"
+                       "1\t0\t1\t2\t\t4\t5\t6\n"
+                       "2\t0.01\tNaN\tNaN\tNaN\t7\t8\t9\n"
+                       "3\t0.02\t1\t1\t1\n");
   Take take = ReadTrc(path);
   ASSERT_EQ(take.frames(), 3);
   EXPECT_FALSE(take.markers.Visible(0, 0));  // z missing
@@ -305,8 +309,10 @@ TEST(TrcRead, PartialAndNanCellsAreMissing) {
 TEST(TrcRead, SpaceSeparatedFileAndNoBlankLine) {
   TempDir dir;
   const std::string path = (dir / "s.trc").string();
-  WriteBytes(path, "PathFileType 4 (X/Y/Z) s.trc\r\nDataRate CameraRate NumFrames NumMarkers Units\r\n"
-                   "60 60 2 1 mm\r\nFrame# Time M1\r\n X1 Y1 Z1\r\n1 0 1.5 2.5 3.5\r\n2 0.0167 4 5 6\r\n");
+  WriteBytes(
+      path,
+      "PathFileType 4 (X/Y/Z) s.trc\r\nDataRate CameraRate NumFrames NumMarkers Units\r\n"
+      "60 60 2 1 mm\r\nFrame# Time M1\r\n X1 Y1 Z1\r\n1 0 1.5 2.5 3.5\r\n2 0.0167 4 5 6\r\n");
   Take take = ReadTrc(path);
   EXPECT_EQ(take.rate_hz, 60.0);
   ASSERT_EQ(take.marker_names, std::vector<std::string>{"M1"});
@@ -317,7 +323,8 @@ TEST(TrcRead, SpaceSeparatedFileAndNoBlankLine) {
 TEST(TrcRead, TruncatedDataGivesRowsPresentAndWarns) {
   TempDir dir;
   const std::string path = (dir / "t.trc").string();
-  WriteBytes(path, Header("mm", 1000000000, 1) + "Frame#\tTime\tA\t\t\n\t\tX1\tY1\tZ1\n1\t0\t1\t2\t3\n2\t0.01\t4\t5");
+  WriteBytes(path, Header("mm", 1000000000, 1) +
+                       "Frame#\tTime\tA\t\t\n\t\tX1\tY1\tZ1\n1\t0\t1\t2\t3\n2\t0.01\t4\t5");
   Take take = ReadTrc(path);
   ASSERT_EQ(take.frames(), 2);
   ExpectMarker(take, 0, 0, 1, 2, 3);
