@@ -12,18 +12,18 @@
 //     zero byte in the first code unit), Latin-1 bytes that are not valid UTF-8,
 //   - CRLF or LF line ends; "!" starts a comment running to the end of the line,
 //   - strings with doubled quotes ("" stands for one ") and line breaks inside
-//     (a CRLF or lone CR inside a string is read as LF, as Praat does),
+//     (a CRLF or lone CR inside a string is read as LF),
 //   - interval tiers ("IntervalTier") and point tiers ("TextTier"),
 //   - "<absent>" tiers (a TextGrid with no tiers), gaps between intervals,
 //   - negative zero (-0), read as 0.
 // Errors (csw::ParseError naming the file and line): not a Praat text file, a
 // binary or non-TextGrid object, a value of the wrong kind or not a number,
-// NaN/inf, xmin > xmax (of the grid, a tier or an interval), a count that is
+// NaN/inf (also as the words nan/inf), xmin > xmax (of the grid, a tier or an interval), a count that is
 // negative, not an integer or larger than the rest of the file could hold, an
 // unknown tier class, or the end of the file before the declared content.
-// Missing file: csw::IoError.
+// Missing file: csw::IoError. Anything after the declared tiers is ignored.
 //
-// Labels: intervals keep start_s < end_s (start == end allowed); point-tier
+// Labels: intervals keep start_s <= end_s; point-tier
 // labels have start_s == end_s == the point's time. Each tier's start_s/end_s
 // is the tier's own xmin/xmax.
 #include <string>
@@ -40,9 +40,10 @@ std::vector<LabelTier> ReadTextGrid(const std::string& path, double* xmin = null
 // Writes a TextGrid in UTF-8 (no BOM), Praat's long text format by default or
 // the short format. Numbers are written in the shortest text that reads back to
 // the same double, so write -> read is exact. Labels are written as they are,
-// gaps included (Praat reads such files; use FillIntervalGaps first for tiers
-// that must cover their domain, e.g. tiers read from an EAF). A tier whose
-// start_s and end_s are both 0 while it holds labels gets the grid's xmin/xmax.
+// gaps included (Praat reads such files but edits them oddly; use
+// FillIntervalGaps first for tiers that must cover their domain, e.g. tiers read
+// from an EAF). A tier whose start_s and end_s are both 0 while it holds labels
+// gets the grid's xmin/xmax.
 // Throws InvalidInput for non-finite times, xmin > xmax or a label with
 // start > end, IoError when the file cannot be written.
 void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers, double xmin,
