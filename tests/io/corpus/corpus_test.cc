@@ -573,6 +573,52 @@ void WriteHandMadeCorpus(const std::string& path, const char* format, int64_t ve
   H5Fclose(f);
 }
 
+// Rewrites the markers of take `take` with HDF5's own filter pipeline and the
+// given chunk shape and filters, as h5py or MATLAB would write them.
+void RewriteMarkersWithHdf5(const std::string& path, const std::string& take, const MarkerArray& markers,
+                            const std::vector<hsize_t>& chunk, bool filters) {
+  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  hid_t g = H5Gopen2(f, ("/takes/" + take).c_str(), H5P_DEFAULT);
+  ASSERT_GE(H5Ldelete(g, "markers", H5P_DEFAULT), 0);
+  hsize_t dims[3] = {static_cast<hsize_t>(markers.frames()), static_cast<hsize_t>(markers.markers()), 3};
+  hid_t s = H5Screate_simple(3, dims, nullptr);
+  hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_chunk(dcpl, 3, chunk.data());
+  if (filters) {
+    H5Pset_shuffle(dcpl);
+    H5Pset_deflate(dcpl, 6);
+  }
+  hid_t d = H5Dcreate2(g, "markers", H5T_IEEE_F32LE, s, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  ASSERT_GE(d, 0);
+  EXPECT_GE(H5Dwrite(d, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, markers.data().data()), 0);
+  H5Dclose(d);
+  H5Pclose(dcpl);
+  H5Sclose(s);
+  H5Gclose(g);
+  H5Fclose(f);
+}
+
+TEST(Corpus, MarkersWrittenByHdf5ItselfReadBack) {
+  TempDir dir;
+  const std::string path = (dir / "c.h5").string();
+  Take t = MakeFullTake("t", 1000, 6);
+  WriteCorpus(path, {t});
+  // Same layout family, HDF5's zlib at level 6 and 100-frame chunks; then
+  // per-marker chunks; then chunks without filters.
+  const std::vector<std::pair<std::vector<hsize_t>, bool>> layouts = {
+      {{100, 6, 3}, true}, {{50, 1, 3}, true}, {{128, 6, 3}, false}};
+  for (const auto& [chunk, filters] : layouts) {
+    RewriteMarkersWithHdf5(path, "t", t.markers, chunk, filters);
+    Corpus corpus = Corpus::Open(path);
+    ExpectSameMarkers(t.markers, corpus.LoadTake("t").markers);
+    MarkerArray window = corpus.LoadMarkers("t", 333, 400);
+    MarkerArray expected(400, 6);
+    std::copy(t.markers.data().begin() + 333 * 18, t.markers.data().begin() + 733 * 18, expected.data().begin());
+    ExpectSameMarkers(expected, window);
+  }
+}
+
 TEST(Corpus, DamagedTakesAreNamedInTheError) {
   TempDir dir;
   const std::string path = (dir / "c.h5").string();
