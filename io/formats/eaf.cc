@@ -507,9 +507,11 @@ void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers,
   std::set<std::string> used_names;
   size_t next_id = 1;
   for (size_t t = 0; t < tiers.size(); ++t) {
-    std::string name = tiers[t].name;
+    const std::string base =
+        tiers[t].name.empty() ? "tier " + std::to_string(t + 1) : tiers[t].name;
+    std::string name = base;
     for (int k = 2; !used_names.insert(name).second; ++k) {
-      name = tiers[t].name + " (" + std::to_string(k) + ")";
+      name = base + " (" + std::to_string(k) + ")";
     }
     pugi::xml_node tier = root.append_child("TIER");
     tier.append_attribute("LINGUISTIC_TYPE_REF") = "default-lt";

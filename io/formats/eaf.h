@@ -33,7 +33,8 @@
 // the linguistic type "default-lt"; times rounded to whole milliseconds;
 // adjacent labels of a tier share their time slot; labels with empty text are
 // not written (ELAN shows gaps instead); point-tier labels become zero-duration
-// annotations; duplicate tier names get " (2)", " (3)", ... (TIER_ID must be
+// annotations; an empty tier name becomes "tier <n>" (1-based position) and
+// duplicate names get " (2)", " (3)", ... (TIER_ID must be non-empty and
 // unique). media_url, when given, is written as the MEDIA_DESCRIPTOR (a path
 // without a scheme is turned into a file:// URL; the MIME type follows the
 // extension). Throws InvalidInput for negative or non-finite times, IoError

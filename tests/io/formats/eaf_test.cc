@@ -119,13 +119,15 @@ TEST(EafRoundTrip, MillisecondTiersAreExact) {
                   3,
                   {{0.1, 0.25, "a<b & \"c\""}, {0.25, 0.9, "\xC3\xA9t\xC3\xA9"}, {1.5, 2.0, "x"}}};
   LabelTier points{"keys", LabelTier::Kind::kPoint, 0, 3, {{0.5, 0.5, "k1"}, {1.25, 1.25, "k2"}}};
+  LabelTier unnamed{"", LabelTier::Kind::kInterval, 0, 3, {{0, 1, "u"}}};
   LabelTier dup = words;
   dup.labels = {{2.5, 3.0, "late"}};
   TempDir dir;
   const std::string out = (dir / "ms.eaf").string();
-  WriteEaf(out, {words, points, dup});
+  WriteEaf(out, {words, points, dup, unnamed});
   auto back = ReadEaf(out);
-  ASSERT_EQ(back.size(), 3u);
+  ASSERT_EQ(back.size(), 4u);
+  EXPECT_EQ(back[3].name, "tier 4");
   EXPECT_EQ(back[0].name, "words");
   EXPECT_EQ(back[1].name, "keys");
   EXPECT_EQ(back[2].name, "words (2)");  // TIER_ID must be unique
@@ -140,14 +142,14 @@ TEST(EafRoundTrip, MillisecondTiersAreExact) {
   ExpectLabel(back[1].labels[1], 1.25, 1.25, "k2");
   ExpectLabel(back[2].labels[0], 2.5, 3.0, "late");
   EXPECT_EQ(back[0].end_s, 3.0);
-  // Adjacent labels share a slot: 0.1, 0.25, 0.9, 1.5, 2.0 + 0.5 x2, 1.25 x2 + 2.5, 3.0.
+  // Adjacent labels share a slot: 0.1, 0.25, 0.9, 1.5, 2.0 + 0.5 x2, 1.25 x2 + 2.5, 3.0 + 0, 1.
   const std::string xml = ReadBytes(out);
   EXPECT_EQ(std::count(xml.begin(), xml.end(), '\n') > 0, true);
   size_t slots = 0;
   for (size_t p = xml.find("<TIME_SLOT "); p != std::string::npos;
        p = xml.find("<TIME_SLOT ", p + 1))
     ++slots;
-  EXPECT_EQ(slots, 11u);
+  EXPECT_EQ(slots, 13u);
 }
 
 TEST(EafWrite, RejectsBadTimes) {
