@@ -23,7 +23,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (reader.info().frames > 0) {
       std::vector<float> p(static_cast<size_t>(reader.info().points * 3));
       std::vector<float> r(static_cast<size_t>(reader.info().points));
-      std::vector<float> a(static_cast<size_t>(reader.info().analog_channels * reader.info().analog_subframes_per_frame));
+      std::vector<float> a(
+          static_cast<size_t>(reader.info().analog_channels * reader.info().analog_subframes_per_frame));
       reader.ReadFrames(reader.info().frames - 1, 1, p.data(), r.data(), a.data());
     }
   } catch (const csw::ParseError&) {

@@ -13,22 +13,22 @@
 namespace csw {
 
 struct C3dInfo {
-  std::string processor;        // "intel", "dec", "mips"
-  std::string storage;          // "int16" or "float"
-  int64_t points = 0;           // POINT:USED
-  int64_t first_frame = 1;      // 1-based (header word, or TRIAL:ACTUAL_START_FIELD for long trials)
-  int64_t frames = 0;           // frames actually available (clamped to what the file holds)
+  std::string processor;    // "intel", "dec", "mips"
+  std::string storage;      // "int16" or "float"
+  int64_t points = 0;       // POINT:USED
+  int64_t first_frame = 1;  // 1-based (header word, or TRIAL:ACTUAL_START_FIELD for long trials)
+  int64_t frames = 0;       // frames actually available (clamped to what the file holds)
   double point_rate_hz = 0;
   int64_t analog_channels = 0;
   int64_t analog_subframes_per_frame = 0;
   double analog_rate_hz = 0;
-  double point_scale = 0;       // POINT:SCALE
-  std::string units;            // POINT:UNITS as stored
+  double point_scale = 0;           // POINT:SCALE
+  std::string units;                // POINT:UNITS as stored
   std::vector<std::string> labels;  // POINT:LABELS, LABELS2.. (trimmed)
   std::vector<std::string> descriptions;
   std::vector<std::string> analog_labels, analog_units;
   std::vector<std::string> analog_descriptions;  // ANALOG:DESCRIPTIONS (trimmed)
-  std::vector<Event> events;    // header events + EVENT group, times in seconds
+  std::vector<Event> events;                     // header events + EVENT group, times in seconds
   std::vector<std::string> warnings;
 };
 

@@ -12,15 +12,11 @@ inline constexpr int kProcessorBase = 83;  // processor byte = 83 + type
 
 enum class Processor { kIntel = 1, kDec = 2, kMips = 3 };
 
-inline uint16_t LoadU16Le(const unsigned char* p) {
-  return static_cast<uint16_t>(p[0] | (p[1] << 8));
-}
-inline uint16_t LoadU16Be(const unsigned char* p) {
-  return static_cast<uint16_t>((p[0] << 8) | p[1]);
-}
+inline uint16_t LoadU16Le(const unsigned char* p) { return static_cast<uint16_t>(p[0] | (p[1] << 8)); }
+inline uint16_t LoadU16Be(const unsigned char* p) { return static_cast<uint16_t>((p[0] << 8) | p[1]); }
 inline uint32_t LoadU32Le(const unsigned char* p) {
-  return static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) |
-         (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
+  return static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) | (static_cast<uint32_t>(p[2]) << 16) |
+         (static_cast<uint32_t>(p[3]) << 24);
 }
 inline uint32_t LoadU32Be(const unsigned char* p) {
   return (static_cast<uint32_t>(p[0]) << 24) | (static_cast<uint32_t>(p[1]) << 16) |
@@ -64,9 +60,7 @@ inline float LoadF32(const unsigned char* p) {
 inline uint16_t LoadU16(Processor proc, const unsigned char* p) {
   return proc == Processor::kMips ? LoadU16Be(p) : LoadU16Le(p);
 }
-inline int16_t LoadI16(Processor proc, const unsigned char* p) {
-  return static_cast<int16_t>(LoadU16(proc, p));
-}
+inline int16_t LoadI16(Processor proc, const unsigned char* p) { return static_cast<int16_t>(LoadU16(proc, p)); }
 inline float LoadF32(Processor proc, const unsigned char* p) {
   switch (proc) {
     case Processor::kDec:

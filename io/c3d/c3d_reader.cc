@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 
@@ -176,8 +177,8 @@ struct ConvertArgs {
   int64_t analog_words;
   int64_t channels;
   int64_t frame_bytes;
-  float scale;   // int16 multiplier (|POINT:SCALE|)
-  float mm;      // millimetres per file unit
+  float scale;           // int16 multiplier (|POINT:SCALE|)
+  float mm;              // millimetres per file unit
   float residual_scale;  // |POINT:SCALE| * mm
   bool analog_unsigned;
   const float* analog_offset;
@@ -237,8 +238,7 @@ void Convert(const ConvertArgs& a) {
         if constexpr (kFloat) {
           raw = c3d::LoadF32<kP>(s);
         } else {
-          raw = a.analog_unsigned ? static_cast<float>(c3d::LoadU16<kP>(s))
-                                  : static_cast<float>(c3d::LoadI16<kP>(s));
+          raw = a.analog_unsigned ? static_cast<float>(c3d::LoadU16<kP>(s)) : static_cast<float>(c3d::LoadI16<kP>(s));
         }
         an[k] = (raw - a.analog_offset[c]) * a.analog_scale[c];
       }
@@ -247,8 +247,8 @@ void Convert(const ConvertArgs& a) {
 }
 
 template <Processor kP, bool kFloat>
-void Stats(const unsigned char* src, int64_t count, int64_t points, int64_t frame_bytes, double scale,
-           int64_t* valid, double* sum) {
+void Stats(const unsigned char* src, int64_t count, int64_t points, int64_t frame_bytes, double scale, int64_t* valid,
+           double* sum) {
   constexpr int kWord = kFloat ? 4 : 2;
   int64_t n = 0;
   double total = 0.0;
@@ -261,14 +261,166 @@ void Stats(const unsigned char* src, int64_t count, int64_t points, int64_t fram
                  static_cast<double>(c3d::LoadF32<kP>(s + 8));
       } else {
         if (c3d::LoadI16<kP>(s + 6) < 0) continue;
-        total += (static_cast<double>(c3d::LoadI16<kP>(s)) + c3d::LoadI16<kP>(s + 2) + c3d::LoadI16<kP>(s + 4)) *
-                 scale;
+        total += (static_cast<double>(c3d::LoadI16<kP>(s)) + c3d::LoadI16<kP>(s + 2) + c3d::LoadI16<kP>(s + 4)) * scale;
       }
       ++n;
     }
   }
   *valid += n;
   *sum += total;
+}
+
+// Walks the linked groups and parameters of a parameter section (`sec`, read from
+// file offset `section_offset`). Damage ends the walk with a warning; a broken link
+// is stepped over when the entry itself is intact.
+ParamTable ParseParameters(const std::vector<unsigned char>& sec, int64_t section_offset, Processor proc,
+                           const std::string& cut_note, const std::function<void(const std::string&)>& warn) {
+  ParamTable table;
+  const int64_t section_size = static_cast<int64_t>(sec.size());
+  int64_t pos = 4;
+  while (true) {
+    if (pos + 2 > section_size) {
+      warn("parameter section ends at offset " + std::to_string(section_offset + pos) + " without a terminator" +
+           cut_note);
+      break;
+    }
+    const int nchar = static_cast<int8_t>(sec[pos]);
+    const int id = static_cast<int8_t>(sec[pos + 1]);
+    if (nchar == 0 || id == 0) break;
+    const int64_t len = std::abs(nchar);
+    int64_t p = pos + 2;
+    if (p + len + 2 > section_size) {
+      warn("parameter entry at offset " + std::to_string(section_offset + pos) + " overruns the parameter section" +
+           cut_note);
+      break;
+    }
+    std::string name(reinterpret_cast<const char*>(sec.data() + p), static_cast<size_t>(len));
+    p += len;
+    const int offset = c3d::LoadI16(proc, sec.data() + p);
+    const int64_t next = p + offset;
+    p += 2;
+    bool body_ok = true;
+    if (!PrintableName(name)) {
+      warn("parameter entry at offset " + std::to_string(section_offset + pos) +
+           " has a non-printable name; stopping the parameter scan there");
+      break;
+    }
+    int64_t body_end = -1;  // end of the entry's description, when readable
+    auto description_end = [&](int64_t q) -> int64_t {
+      return q + 1 <= section_size && q + 1 + sec[q] <= section_size ? q + 1 + sec[q] : -1;
+    };
+    if (id < 0) {
+      body_end = description_end(p);
+      if (body_end < 0) {
+        body_ok = false;
+      } else {
+        table.AddGroup(-id, name);
+      }
+    } else {
+      Param prm;
+      prm.group_id = id;
+      prm.name = Upper(name);
+      prm.file_offset = section_offset + pos;
+      if (p + 2 > section_size) {
+        body_ok = false;
+      } else {
+        prm.type = static_cast<int8_t>(sec[p]);
+        const int ndims = sec[p + 1];
+        p += 2;
+        if (p + ndims > section_size) {
+          body_ok = false;
+        } else {
+          for (int d = 0; d < ndims; ++d) prm.dims.push_back(sec[p + d]);
+          p += ndims;
+          const int elem = std::abs(prm.type);
+          if (elem != 1 && elem != 2 && elem != 4) {
+            warn("parameter " + Quote(name) + " at offset " + std::to_string(prm.file_offset) + " has unknown type " +
+                 std::to_string(prm.type) + "; ignored");
+          } else {
+            const int64_t bytes = prm.Count() * elem;
+            if (p + bytes > section_size) {
+              body_ok = false;
+            } else {
+              prm.data.assign(sec.begin() + p, sec.begin() + p + bytes);
+              table.AddParam(std::move(prm));
+              body_end = description_end(p + bytes);
+            }
+          }
+        }
+      }
+    }
+    if (!body_ok) {
+      warn("parameter entry " + Quote(name) + " at offset " + std::to_string(section_offset + pos) +
+           " overruns the parameter section" + cut_note + "; stopping the parameter scan there");
+      break;
+    }
+    if (offset == 0) break;
+    if (next <= pos || next > section_size) {
+      if (body_end > pos) {
+        // e.g. sample_02 sgi_*.c3d: a link stored in the wrong byte order
+        warn("parameter entry " + Quote(name) + " at offset " + std::to_string(section_offset + pos) +
+             " has an invalid link to the next entry (" + std::to_string(offset) +
+             "); continuing right after its description");
+        pos = body_end;
+        continue;
+      }
+      warn("parameter entry " + Quote(name) + " at offset " + std::to_string(section_offset + pos) +
+           " has an invalid link to the next entry (" + std::to_string(offset) +
+           "); stopping the parameter scan there");
+      break;
+    }
+    pos = next;
+  }
+  return table;
+}
+
+// Header events (up to 18, 4-character labels), then the EVENT group (labels,
+// contexts, descriptions, times as [minutes, seconds] pairs).
+std::vector<Event> ReadEvents(const unsigned char* h, const ParamTable& table, Processor proc,
+                              const std::function<void(const std::string&)>& warn) {
+  std::vector<Event> events;
+  int num_events = c3d::LoadI16(proc, h + 300);
+  if (num_events < 0 || num_events > kHeaderEventsMax) {
+    warn("header event count " + std::to_string(num_events) + " at offset 300 is out of range; ignoring them");
+    num_events = 0;
+  }
+  for (int i = 0; i < num_events; ++i) {
+    Event e;
+    e.time_s = c3d::LoadF32(proc, h + 304 + 4 * i);
+    e.label = Trim(std::string(reinterpret_cast<const char*>(h + 396 + 4 * i), 4));
+    events.push_back(e);
+  }
+  // BKIN Dexterit-E (sample_22) writes a Vicon-like group named EVENTS.
+  std::string ev = table.Find("EVENT", "TIMES") ? "EVENT" : table.Find("EVENTS", "TIMES") ? "EVENTS" : "";
+  if (ev == "EVENTS") warn("events read from the non-standard EVENTS group");
+  if (!ev.empty()) {
+    std::vector<std::string> labels = Strings(table.Find(ev, "LABELS"));
+    std::vector<std::string> contexts = Strings(table.Find(ev, "CONTEXTS"));
+    std::vector<std::string> descriptions = Strings(table.Find(ev, "DESCRIPTIONS"));
+    const Param* p_times = table.Find(ev, "TIMES");
+    std::vector<double> times = Numbers(p_times, proc);
+    if (p_times && p_times->dims.size() == 1) {
+      // a single row of seconds: make [0, seconds] pairs
+      std::vector<double> pairs;
+      for (double t : times) pairs.insert(pairs.end(), {0.0, t});
+      times = std::move(pairs);
+    }
+    int64_t n = static_cast<int64_t>(times.size() / 2);
+    if (auto used = Number(table.Find(ev, "USED"), proc)) {
+      int64_t u = ToInt(*used);
+      if (u > n) warn(ev + ":USED (" + std::to_string(u) + ") exceeds the " + std::to_string(n) + " stored times");
+      n = std::clamp<int64_t>(u, 0, n);
+    }
+    for (int64_t i = 0; i < n; ++i) {
+      Event e;
+      e.time_s = 60.0 * times[2 * i] + times[2 * i + 1];
+      if (i < static_cast<int64_t>(labels.size())) e.label = labels[i];
+      if (i < static_cast<int64_t>(contexts.size())) e.context = contexts[i];
+      if (i < static_cast<int64_t>(descriptions.size())) e.description = descriptions[i];
+      events.push_back(e);
+    }
+  }
+  return events;
 }
 
 }  // namespace
@@ -326,8 +478,8 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
         info_.processor = "mips";
         break;
       default:
-        warn("unknown processor type byte " + std::to_string(ph[3]) + " at offset " +
-             std::to_string(param_start + 3) + "; assuming Intel");
+        warn("unknown processor type byte " + std::to_string(ph[3]) + " at offset " + std::to_string(param_start + 3) +
+             "; assuming Intel");
         info_.processor = "intel";
         break;
     }
@@ -369,101 +521,7 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
     std::vector<unsigned char> sec(static_cast<size_t>(section_size));
     read_at(param_start, section_size, sec.data());
 
-    ParamTable table;
-    int64_t pos = 4;
-    while (true) {
-      if (pos + 2 > section_size) {
-        warn("parameter section ends at offset " + std::to_string(param_start + pos) + " without a terminator" +
-             cut_note);
-        break;
-      }
-      const int nchar = static_cast<int8_t>(sec[pos]);
-      const int id = static_cast<int8_t>(sec[pos + 1]);
-      if (nchar == 0 || id == 0) break;
-      const int64_t len = std::abs(nchar);
-      int64_t p = pos + 2;
-      if (p + len + 2 > section_size) {
-        warn("parameter entry at offset " + std::to_string(param_start + pos) + " overruns the parameter section" +
-             cut_note);
-        break;
-      }
-      std::string name(reinterpret_cast<const char*>(sec.data() + p), static_cast<size_t>(len));
-      p += len;
-      const int offset = c3d::LoadI16(proc, sec.data() + p);
-      const int64_t next = p + offset;
-      p += 2;
-      bool body_ok = true;
-      if (!PrintableName(name)) {
-        warn("parameter entry at offset " + std::to_string(param_start + pos) +
-             " has a non-printable name; stopping the parameter scan there");
-        break;
-      }
-      int64_t body_end = -1;  // end of the entry's description, when readable
-      auto description_end = [&](int64_t q) -> int64_t {
-        return q + 1 <= section_size && q + 1 + sec[q] <= section_size ? q + 1 + sec[q] : -1;
-      };
-      if (id < 0) {
-        body_end = description_end(p);
-        if (body_end < 0) {
-          body_ok = false;
-        } else {
-          table.AddGroup(-id, name);
-        }
-      } else {
-        Param prm;
-        prm.group_id = id;
-        prm.name = Upper(name);
-        prm.file_offset = param_start + pos;
-        if (p + 2 > section_size) {
-          body_ok = false;
-        } else {
-          prm.type = static_cast<int8_t>(sec[p]);
-          const int ndims = sec[p + 1];
-          p += 2;
-          if (p + ndims > section_size) {
-            body_ok = false;
-          } else {
-            for (int d = 0; d < ndims; ++d) prm.dims.push_back(sec[p + d]);
-            p += ndims;
-            const int elem = std::abs(prm.type);
-            if (elem != 1 && elem != 2 && elem != 4) {
-              warn("parameter " + Quote(name) + " at offset " + std::to_string(prm.file_offset) +
-                   " has unknown type " + std::to_string(prm.type) + "; ignored");
-            } else {
-              const int64_t bytes = prm.Count() * elem;
-              if (p + bytes > section_size) {
-                body_ok = false;
-              } else {
-                prm.data.assign(sec.begin() + p, sec.begin() + p + bytes);
-                table.AddParam(std::move(prm));
-                body_end = description_end(p + bytes);
-              }
-            }
-          }
-        }
-      }
-      if (!body_ok) {
-        warn("parameter entry " + Quote(name) + " at offset " + std::to_string(param_start + pos) +
-             " overruns the parameter section" + cut_note + "; stopping the parameter scan there");
-        break;
-      }
-      if (offset == 0) break;
-      if (next <= pos || next > section_size) {
-        if (body_end > pos) {
-          // e.g. sample_02 sgi_*.c3d: a link stored in the wrong byte order
-          warn("parameter entry " + Quote(name) + " at offset " + std::to_string(param_start + pos) +
-               " has an invalid link to the next entry (" + std::to_string(offset) +
-               "); continuing right after its description");
-          pos = body_end;
-          continue;
-        }
-        warn("parameter entry " + Quote(name) + " at offset " + std::to_string(param_start + pos) +
-             " has an invalid link to the next entry (" + std::to_string(offset) +
-             "); stopping the parameter scan there");
-        break;
-      }
-      pos = next;
-    }
+    ParamTable table = ParseParameters(sec, param_start, proc, cut_note, warn);
     if (!table.HasGroup("POINT")) warn("no POINT group in the parameter section");
 
     // --- storage, scale, units ---
@@ -511,8 +569,8 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
     info_.descriptions = StringSeries(table, "POINT", "DESCRIPTIONS");
     if (static_cast<int64_t>(info_.labels.size()) < info_.points) {
       if (info_.points > 0) {
-        warn("POINT:LABELS has " + std::to_string(info_.labels.size()) + " labels for " +
-             std::to_string(info_.points) + " points; naming the rest by number");
+        warn("POINT:LABELS has " + std::to_string(info_.labels.size()) + " labels for " + std::to_string(info_.points) +
+             " points; naming the rest by number");
       }
       for (int64_t i = static_cast<int64_t>(info_.labels.size()); i < info_.points; ++i) {
         info_.labels.push_back("Point" + std::to_string(i + 1));
@@ -681,47 +739,7 @@ C3dReader::C3dReader(const std::string& path) : path_(path) {
     }
     info_.frames = frames;
 
-    // --- events: header, then the EVENT group ---
-    int num_events = c3d::LoadI16(proc, h + 300);
-    if (num_events < 0 || num_events > kHeaderEventsMax) {
-      warn("header event count " + std::to_string(num_events) + " at offset 300 is out of range; ignoring them");
-      num_events = 0;
-    }
-    for (int i = 0; i < num_events; ++i) {
-      Event e;
-      e.time_s = c3d::LoadF32(proc, h + 304 + 4 * i);
-      e.label = Trim(std::string(reinterpret_cast<const char*>(h + 396 + 4 * i), 4));
-      info_.events.push_back(e);
-    }
-    // BKIN Dexterit-E (sample_22) writes a Vicon-like group named EVENTS.
-    std::string ev = table.Find("EVENT", "TIMES") ? "EVENT" : table.Find("EVENTS", "TIMES") ? "EVENTS" : "";
-    if (ev == "EVENTS") warn("events read from the non-standard EVENTS group");
-    if (!ev.empty()) {
-      std::vector<std::string> labels = Strings(table.Find(ev, "LABELS"));
-      std::vector<std::string> contexts = Strings(table.Find(ev, "CONTEXTS"));
-      std::vector<std::string> descriptions = Strings(table.Find(ev, "DESCRIPTIONS"));
-      const Param* p_times = table.Find(ev, "TIMES");
-      std::vector<double> times = Numbers(p_times, proc);
-      int64_t n = static_cast<int64_t>(times.size() / 2);
-      if (auto used = Number(table.Find(ev, "USED"), proc)) {
-        int64_t u = ToInt(*used);
-        if (u < n) n = std::max<int64_t>(u, 0);
-        if (u > n) warn("EVENT:USED (" + std::to_string(u) + ") exceeds the " + std::to_string(n) + " stored times");
-      }
-      if (p_times && p_times->dims.size() == 1) {
-        // a single row of seconds
-        n = static_cast<int64_t>(times.size());
-        for (int64_t i = 0; i < n; ++i) times.insert(times.begin() + 2 * i, 0.0);
-      }
-      for (int64_t i = 0; i < n; ++i) {
-        Event e;
-        e.time_s = 60.0 * times[2 * i] + times[2 * i + 1];
-        if (i < static_cast<int64_t>(labels.size())) e.label = labels[i];
-        if (i < static_cast<int64_t>(contexts.size())) e.context = contexts[i];
-        if (i < static_cast<int64_t>(descriptions.size())) e.description = descriptions[i];
-        info_.events.push_back(e);
-      }
-    }
+    info_.events = ReadEvents(h, table, proc, warn);
   } catch (...) {
     ::close(fd_);
     fd_ = -1;

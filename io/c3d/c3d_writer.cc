@@ -12,9 +12,9 @@ namespace csw {
 
 namespace {
 
-constexpr float kPointScale = -0.1f;          // float storage; residual unit 0.1 mm
-constexpr int64_t kMaxParamBytes = 32000;     // a parameter's link is a signed 16-bit offset
-constexpr int64_t kMaxDim = 255;              // dimensions are stored in one byte
+constexpr float kPointScale = -0.1f;       // float storage; residual unit 0.1 mm
+constexpr int64_t kMaxParamBytes = 32000;  // a parameter's link is a signed 16-bit offset
+constexpr int64_t kMaxDim = 255;           // dimensions are stored in one byte
 
 // Builds a parameter section: groups and parameters with their links.
 class ParamWriter {

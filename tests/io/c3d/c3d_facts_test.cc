@@ -89,8 +89,8 @@ TEST(C3dFacts, DecFloatIsSwappedHalvesDividedByFour) {
   float v = -0.28f * 4.0f;
   uint32_t bits;
   std::memcpy(&bits, &v, 4);
-  const unsigned char dec[4] = {static_cast<unsigned char>((bits >> 16) & 0xFF),
-                                static_cast<unsigned char>(bits >> 24), static_cast<unsigned char>(bits & 0xFF),
+  const unsigned char dec[4] = {static_cast<unsigned char>((bits >> 16) & 0xFF), static_cast<unsigned char>(bits >> 24),
+                                static_cast<unsigned char>(bits & 0xFF),
                                 static_cast<unsigned char>((bits >> 8) & 0xFF)};
   EXPECT_EQ(c3d::LoadF32<c3d::Processor::kDec>(dec), -0.28f);
   const unsigned char zero[4] = {0, 0, 0x12, 0x34};  // zero exponent: a true zero in VAX
@@ -253,11 +253,11 @@ TEST(C3dFacts, DamagedParameterSectionsRecovered) {
 }
 
 TEST(C3dFacts, EveryPeerErrorFileGivesDataOrOneParseError) {
-  for (const char* rel : {"btk/Empty.c3d", "c3d.org/sample_01/Eb015si.c3d", "c3d.org/sample_01/Eb015sr.c3d",
-                          "c3d.org/sample_02/sgi_int.c3d", "c3d.org/sample_02/sgi_real.c3d",
-                          "c3d.org/sample_06/MACsample.c3d", "c3d.org/sample_13/Dance.c3d",
-                          "c3d.org/sample_13/golfswing.c3d", "c3d.org/sample_18/bad_parameter_section.c3d",
-                          "c3d.org/sample_22/BKINtechnologies.c3d", "c3d.org/sample_29/Facial-Sing.c3d"}) {
+  for (const char* rel :
+       {"btk/Empty.c3d", "c3d.org/sample_01/Eb015si.c3d", "c3d.org/sample_01/Eb015sr.c3d",
+        "c3d.org/sample_02/sgi_int.c3d", "c3d.org/sample_02/sgi_real.c3d", "c3d.org/sample_06/MACsample.c3d",
+        "c3d.org/sample_13/Dance.c3d", "c3d.org/sample_13/golfswing.c3d", "c3d.org/sample_18/bad_parameter_section.c3d",
+        "c3d.org/sample_22/BKINtechnologies.c3d", "c3d.org/sample_29/Facial-Sing.c3d"}) {
     CSW_REQUIRE_SHARED_DATA(std::string("c3d/") + rel);
     SCOPED_TRACE(rel);
     try {

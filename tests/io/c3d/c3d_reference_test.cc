@@ -115,7 +115,8 @@ TEST(C3dReferenceTable, IsReadable) {
   CSW_REQUIRE_SHARED_DATA("c3d/REFERENCE.tsv");
   std::vector<RefRow> rows = LoadReference();
   EXPECT_GE(rows.size(), 60u);
-  for (const auto& [file, fields] : PeerDivergences()) {
+  for (const auto& entry : PeerDivergences()) {
+    const std::string& file = entry.first;
     EXPECT_TRUE(std::any_of(rows.begin(), rows.end(), [&](const RefRow& r) { return r.file == file; })) << file;
   }
 }

@@ -176,8 +176,8 @@ TEST(C3dRoundTrip, WriterRejectsWhatC3dCannotHold) {
 
 // Real files: read -> write -> read keeps points, analog (already scaled), labels, events.
 TEST(C3dRoundTrip, RealFiles) {
-  for (const char* rel : {"c3d/ezc3d/Vicon.c3d", "c3d/c3d.org/sample_01/Eb015vi.c3d", "c3d/c3d.org/sample_03/gait-pig-nz.c3d",
-                          "c3d/c3d.org/sample_02/sgi_int.c3d"}) {
+  for (const char* rel : {"c3d/ezc3d/Vicon.c3d", "c3d/c3d.org/sample_01/Eb015vi.c3d",
+                          "c3d/c3d.org/sample_03/gait-pig-nz.c3d", "c3d/c3d.org/sample_02/sgi_int.c3d"}) {
     CSW_REQUIRE_SHARED_DATA(rel);
     SCOPED_TRACE(rel);
     testing::TempDir dir;
