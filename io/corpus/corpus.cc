@@ -112,6 +112,9 @@ Handle FileAccessList(const Where& where) {
   // for large attributes.
   h5::Check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18), where,
             "cannot set file format bounds", "");
+  // Lock the file where the file system allows it, and still work where it
+  // does not (some network file systems).
+  h5::Check(H5Pset_file_locking(fapl.get(), true, true), where, "cannot set file locking", "");
   // Closing the file fails loudly if we leaked an object handle.
   h5::Check(H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_SEMI), where, "cannot set close degree", "");
   return fapl;
