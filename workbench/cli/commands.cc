@@ -138,6 +138,38 @@ class ExportCommand : public Command {
   jobs::ExportOptions options_;
 };
 
+class SimulateCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("simulate",
+                              "The virtual cuer: write realistic cued-speech captures (C3D, WAV, TextGrid) with "
+                              "ground truth");
+    sub_->add_option("corpus", options_.corpus, "shapes, visemes, sentences, or demo (all three)")
+        ->required()
+        ->check(CLI::IsMember({"shapes", "visemes", "sentences", "demo"}));
+    sub_->add_option("-o,--output", options_.output, "Output folder")->required();
+    sub_->add_option("--seed", options_.seed, "Random seed: the same seed gives identical files")
+        ->capture_default_str();
+    sub_->add_option("--count", options_.count, "Number of sentences (0 = all)")->capture_default_str();
+    sub_->add_option("--text", options_.texts, "French sentence(s) to cue instead of the shipped list");
+    sub_->add_option("--sentences", options_.sentences_file, "File with one French sentence per line");
+    sub_->add_option("--noise", options_.noise_mm, "Marker noise sigma in mm")->capture_default_str();
+    sub_->add_option("--rate", options_.rate_hz, "Capture rate in Hz")->capture_default_str();
+    sub_->add_flag("!--no-occlusions", options_.occlusions, "No camera occlusions");
+    sub_->add_flag("--label-swaps", options_.label_swaps, "Add a temporary swap of two hand marker labels per take");
+    sub_->add_flag("--clean", options_.clean, "Also write <take>.clean.c3d without capture artefacts");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    std::vector<std::string> takes = jobs::Simulate(options_, progress);
+    std::cout << "wrote " << takes.size() << " take(s) to " << options_.output << "\n";
+    return 0;
+  }
+
+ private:
+  jobs::SimulateJobOptions options_;
+};
+
 }  // namespace
 
 std::vector<std::unique_ptr<Command>> MakeCommands() {
@@ -146,6 +178,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<ImportCommand>());
   c.push_back(std::make_unique<InfoCommand>());
   c.push_back(std::make_unique<ExportCommand>());
+  c.push_back(std::make_unique<SimulateCommand>());
   return c;
 }
 

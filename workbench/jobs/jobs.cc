@@ -13,6 +13,7 @@
 #include "core/markerset.h"
 #include "core/sha256.h"
 #include "core/take.h"
+#include "datasets/virtual_cuer.h"
 #include "io/c3d/c3d.h"
 #include "io/corpus/corpus.h"
 #include "io/formats/eaf.h"
@@ -420,6 +421,56 @@ void Export(const ExportOptions& options, Progress& progress) {
     throw;
   }
   progress.Update("export", 1.0);
+}
+
+// ---- simulate --------------------------------------------------------------
+
+std::string SimulateJobOptions::Check() const {
+  if (output.empty()) return "simulate: no output folder (-o)";
+  CorpusKind kind;
+  if (corpus != "demo" && !ParseCorpusKind(corpus, &kind))
+    return "simulate: unknown corpus \"" + corpus + "\" (shapes, visemes, sentences or demo)";
+  if (count < 0) return "simulate: --count must be >= 0";
+  if (!texts.empty() && !sentences_file.empty()) return "simulate: give --text or --sentences, not both";
+  return "";
+}
+
+std::vector<std::string> Simulate(const SimulateJobOptions& options, Progress& progress) {
+  if (std::string why = options.Check(); !why.empty()) throw InvalidInput(why);
+  if (options.corpus == "demo") {
+    GenerateDemoCorpus(options.output, options.seed, options.count > 0 ? options.count : 20, progress);
+    std::vector<std::string> names;
+    for (const char* sub : {"shapes", "visemes", "sentences"}) {
+      std::error_code ec;
+      for (const auto& e : fs::directory_iterator(fs::path(options.output) / sub, ec))
+        if (e.path().extension() == ".c3d" && e.path().stem().extension().empty())
+          names.push_back(std::string(sub) + "/" + e.path().stem().string());
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+  SimulateOptions o;
+  ParseCorpusKind(options.corpus, &o.kind);
+  o.seed = options.seed;
+  o.count = options.count;
+  o.noise_mm = options.noise_mm;
+  o.occlusions = options.occlusions;
+  o.label_swaps = options.label_swaps;
+  o.rate_hz = options.rate_hz;
+  o.write_clean = options.clean;
+  o.sentences = options.texts;
+  if (!options.sentences_file.empty()) {
+    std::ifstream in(options.sentences_file);
+    if (!in) throw IoError(options.sentences_file, "cannot open sentence list");
+    std::string line;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      if (!line.empty() && line[0] != '#') o.sentences.push_back(line);
+    }
+    if (o.sentences.empty()) throw InvalidInput(options.sentences_file + ": no sentences (one per line)");
+  }
+  if (std::string why = o.Check(); !why.empty()) throw InvalidInput("simulate: " + why);
+  return SimulateCorpus(o, options.output, progress);
 }
 
 }  // namespace csw::jobs
