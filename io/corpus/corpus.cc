@@ -1,12 +1,12 @@
 #include "io/corpus/corpus.h"
 
 #include <fcntl.h>
+#include <libdeflate.h>
 #include <sys/file.h>
 #include <unistd.h>
 
-#include <libdeflate.h>
-
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cerrno>
 #include <cmath>
@@ -16,7 +16,6 @@
 #include <filesystem>
 #include <system_error>
 #include <thread>
-#include <atomic>
 
 #include "core/error.h"
 #include "io/corpus/hdf5_util.h"
@@ -110,8 +109,8 @@ Handle FileAccessList(const Where& where) {
   Handle fapl = h5::Own(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, where, "cannot create file access properties", "");
   // Objects readable by HDF5 1.8 (older MATLAB releases), with dense storage
   // for large attributes.
-  h5::Check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18), where,
-            "cannot set file format bounds", "");
+  h5::Check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18), where, "cannot set file format bounds",
+            "");
   // Lock the file where the file system allows it, and still work where it
   // does not (some network file systems).
   h5::Check(H5Pset_file_locking(fapl.get(), true, true), where, "cannot set file locking", "");
@@ -147,9 +146,8 @@ void ValidateCorpus(hid_t file, const Where& where) {
   auto version = h5::ReadAttrInt(file, "format_version", where, "/");
   if (!version) throw Damaged(where, "csw corpus without a format_version attribute");
   if (*version > kCorpusFormatVersion) {
-    throw Damaged(where, "corpus format_version " + std::to_string(*version) +
-                             " is newer than this csw reads (" + std::to_string(kCorpusFormatVersion) +
-                             "); update csw");
+    throw Damaged(where, "corpus format_version " + std::to_string(*version) + " is newer than this csw reads (" +
+                             std::to_string(kCorpusFormatVersion) + "); update csw");
   }
   if (*version < 1) throw Damaged(where, "invalid corpus format_version " + std::to_string(*version));
   if (!h5::LinkExists(file, "takes")) throw Damaged(where, "csw corpus without a /takes group");
@@ -163,7 +161,8 @@ void ValidateCorpus(hid_t file, const Where& where) {
     if (!h5::LinkExists(group.get(), "markers")) throw Damaged(where, prefix + obj + "/markers is missing");
     if (!h5::LinkExists(group.get(), "marker_names")) throw Damaged(where, prefix + obj + "/marker_names is missing");
     hid_t did = H5Dopen2(group.get(), "markers", H5P_DEFAULT);
-    if (did < 0) throw Damaged(where, prefix + obj + "/markers is not a readable dataset (" + h5::TakeErrorMessage() + ")");
+    if (did < 0)
+      throw Damaged(where, prefix + obj + "/markers is not a readable dataset (" + h5::TakeErrorMessage() + ")");
     Handle markers(did, H5Dclose);
     std::vector<hsize_t> dims = h5::Shape(markers.get(), where, obj + "/markers");
     if (dims.size() != 3) {
@@ -334,8 +333,8 @@ void Append2D(hid_t dataset, int64_t old_rows, int64_t rows, int64_t cols, const
   h5::Check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, cnt, nullptr), where, "cannot select",
             object);
   Handle mspace = h5::Own(H5Screate_simple(2, cnt, nullptr), H5Sclose, where, "cannot write", object);
-  h5::Check(H5Dwrite(dataset, H5T_NATIVE_FLOAT, mspace.get(), fspace.get(), H5P_DEFAULT, data), where,
-            "cannot write", object);
+  h5::Check(H5Dwrite(dataset, H5T_NATIVE_FLOAT, mspace.get(), fspace.get(), H5P_DEFAULT, data), where, "cannot write",
+            object);
 }
 
 std::vector<std::string> PadTo(std::vector<std::string> v, size_t n) {
@@ -371,8 +370,7 @@ void WriteTierGroups(hid_t take_group, const std::vector<LabelTier>& tiers, cons
     const std::string o = tobj + "/" + gname;
     Handle tg = h5::CreateGroup(g.get(), gname, where, o);
     h5::WriteAttr(tg.get(), "name", tier.name, where, o);
-    h5::WriteAttr(tg.get(), "kind", std::string(tier.kind == LabelTier::Kind::kPoint ? "point" : "interval"), where,
-                  o);
+    h5::WriteAttr(tg.get(), "kind", std::string(tier.kind == LabelTier::Kind::kPoint ? "point" : "interval"), where, o);
     h5::WriteAttr(tg.get(), "start_s", tier.start_s, where, o);
     h5::WriteAttr(tg.get(), "end_s", tier.end_s, where, o);
     std::vector<double> start, end;
@@ -408,9 +406,9 @@ void WriteAudioGroup(hid_t take_group, const Audio& audio, const std::string& so
   const std::string sobj = aobj + "/samples";
   hsize_t dims[2] = {static_cast<hsize_t>(audio.frames()), static_cast<hsize_t>(audio.channels)};
   Handle space = h5::Own(H5Screate_simple(2, dims, nullptr), H5Sclose, where, "cannot create", sobj);
-  Handle ds = h5::Own(
-      H5Dcreate2(g.get(), "samples", H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
-      where, "cannot create", sobj);
+  Handle ds =
+      h5::Own(H5Dcreate2(g.get(), "samples", H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+              H5Dclose, where, "cannot create", sobj);
   h5::Check(H5Dwrite(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, audio.samples.data()), where,
             "cannot write", sobj);
   h5::WriteAttr(ds.get(), "rate_hz", audio.rate_hz, where, sobj);
@@ -442,9 +440,8 @@ std::vector<LabelTier> ReadTiers(hid_t take_group, const Where& where, const std
   const std::string tobj = obj + "/tiers";
   Handle g = h5::OpenGroup(take_group, "tiers", where, tobj);
   std::vector<std::string> names = h5::LinkNames(g.get(), where, tobj);
-  std::stable_sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
-    return TierGroupIndex(a) < TierGroupIndex(b);
-  });
+  std::stable_sort(names.begin(), names.end(),
+                   [](const std::string& a, const std::string& b) { return TierGroupIndex(a) < TierGroupIndex(b); });
   for (const std::string& gname : names) {
     const std::string o = tobj + "/" + gname;
     Handle tg = h5::OpenGroup(g.get(), gname, where, o);
@@ -810,7 +807,9 @@ CorpusTransaction::CorpusTransaction(const std::string& path) : impl_(std::make_
   t.lock_fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (t.lock_fd < 0) throw IoError(path, "cannot create the lock file " + lock_path + ": " + Errno());
   if (::flock(t.lock_fd, LOCK_EX | LOCK_NB) != 0) {
-    if (errno == EWOULDBLOCK) throw IoError(path, "another process is writing this corpus (" + lock_path + " is locked)");
+    if (errno == EWOULDBLOCK)
+      throw IoError(path, "another transaction (in this or another process) is writing this corpus (" + lock_path +
+                              " is locked)");
     throw IoError(path, "cannot lock " + lock_path + ": " + Errno());
   }
   // We hold the lock: a temporary file left here belongs to a killed writer.
@@ -925,9 +924,9 @@ struct CorpusTransaction::TakeWriter::Impl {
   int64_t gaps = 0;
   bool finished = false;
   std::vector<std::unique_ptr<libdeflate_compressor, CompressorDeleter>> compressors;  // per thread
-  std::vector<std::vector<uint8_t>> shuffled;                                           // per thread
-  std::vector<std::vector<uint8_t>> compressed;                                         // per chunk
-  std::vector<size_t> compressed_size;                                                  // per chunk
+  std::vector<std::vector<uint8_t>> shuffled;                                          // per thread
+  std::vector<std::vector<uint8_t>> compressed;                                        // per chunk
+  std::vector<size_t> compressed_size;                                                 // per chunk
 
   void CheckOpen() const {
     if (finished) throw Error(tx->path + ": take '" + name + "' was already finished");
@@ -1006,8 +1005,8 @@ struct CorpusTransaction::TakeWriter::Impl {
       for (int64_t c = t; c < chunks; c += threads) {
         Shuffle4(buffer.data() + static_cast<size_t>(c) * chunk_values, chunk_values, shuffled[t].data());
         auto& out = compressed[static_cast<size_t>(c)];
-        size_t size = libdeflate_zlib_compress(compressors[t].get(), shuffled[t].data(), shuffled[t].size(),
-                                               out.data(), out.size());
+        size_t size = libdeflate_zlib_compress(compressors[t].get(), shuffled[t].data(), shuffled[t].size(), out.data(),
+                                               out.size());
         if (size == 0) failed = true;
         compressed_size[static_cast<size_t>(c)] = size;
       }
@@ -1166,9 +1165,8 @@ CorpusTransaction::TakeWriter CorpusTransaction::BeginTake(const Take& h, IfTake
     h5::Check(H5Pset_deflate(dcpl.get(), kCorpusDeflateLevel), where, "cannot set the deflate filter of", mobj);
     float fill = kMissing;
     h5::Check(H5Pset_fill_value(dcpl.get(), H5T_NATIVE_FLOAT, &fill), where, "cannot set the fill value of", mobj);
-    wi.markers = h5::Own(
-        H5Dcreate2(g, "markers", H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT), H5Dclose,
-        where, "cannot create", mobj);
+    wi.markers = h5::Own(H5Dcreate2(g, "markers", H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                         H5Dclose, where, "cannot create", mobj);
     h5::WriteAttr(wi.markers.get(), "units", std::string("mm"), where, mobj);
   }
   if (channels > 0) {

@@ -156,8 +156,7 @@ std::vector<std::string> LinkNames(hid_t group, const Where& where, const std::s
     ssize_t len = H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
     if (len < 0) throw IoError(where.file, Describe(where, "cannot list", object));
     std::string name(static_cast<size_t>(len), '\0');
-    if (H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size() + 1,
-                           H5P_DEFAULT) < 0) {
+    if (H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size() + 1, H5P_DEFAULT) < 0) {
       throw IoError(where.file, Describe(where, "cannot list", object));
     }
     names.push_back(std::move(name));
@@ -191,14 +190,14 @@ namespace {
 
 Handle CreateAttr(hid_t obj, const std::string& name, hid_t type, hid_t space, const Where& where,
                   const std::string& object) {
-  if (AttrExists(obj, name)) Check(H5Adelete(obj, name.c_str()), where, "cannot replace attribute " + name + " of", object);
+  if (AttrExists(obj, name))
+    Check(H5Adelete(obj, name.c_str()), where, "cannot replace attribute " + name + " of", object);
   return Own(H5Acreate2(obj, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, where,
              "cannot create attribute " + name + " of", object);
 }
 
 Handle OpenAttr(hid_t obj, const std::string& name, const Where& where, const std::string& object) {
-  return Own(H5Aopen(obj, name.c_str(), H5P_DEFAULT), H5Aclose, where, "cannot open attribute " + name + " of",
-             object);
+  return Own(H5Aopen(obj, name.c_str(), H5P_DEFAULT), H5Aclose, where, "cannot open attribute " + name + " of", object);
 }
 
 }  // namespace
@@ -228,8 +227,8 @@ void WriteAttr(hid_t obj, const std::string& name, const std::vector<std::string
                const std::string& object) {
   Handle type = Utf8StringType(where);
   hsize_t n = values.size();
-  Handle space = Own(H5Screate_simple(1, &n, nullptr), H5Sclose, where, "cannot write attribute " + name + " of",
-                     object);
+  Handle space =
+      Own(H5Screate_simple(1, &n, nullptr), H5Sclose, where, "cannot write attribute " + name + " of", object);
   Handle attr = CreateAttr(obj, name, type.get(), space.get(), where, object);
   if (n == 0) return;
   std::vector<const char*> ptrs;
@@ -244,25 +243,27 @@ std::optional<double> ReadAttrDouble(hid_t obj, const std::string& name, const W
   Handle attr = OpenAttr(obj, name, where, object);
   Handle space = Own(H5Aget_space(attr.get()), H5Sclose, where, "cannot read attribute " + name + " of", object);
   if (H5Sget_simple_extent_npoints(space.get()) != 1) {
-    throw ParseError({where.file, std::nullopt, std::nullopt}, "attribute " + name + " of " + object + " is not a single number");
+    throw ParseError({where.file, std::nullopt, std::nullopt},
+                     "attribute " + name + " of " + object + " is not a single number");
   }
   Handle type = Own(H5Aget_type(attr.get()), H5Tclose, where, "cannot read attribute " + name + " of", object);
   H5T_class_t cls = H5Tget_class(type.get());
   if (cls != H5T_FLOAT && cls != H5T_INTEGER) {
-    throw ParseError({where.file, std::nullopt, std::nullopt}, "attribute " + name + " of " + object + " is not a number");
+    throw ParseError({where.file, std::nullopt, std::nullopt},
+                     "attribute " + name + " of " + object + " is not a number");
   }
   double v = 0;
   Check(H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &v), where, "cannot read attribute " + name + " of", object);
   return v;
 }
 
-std::optional<int64_t> ReadAttrInt(hid_t obj, const std::string& name, const Where& where,
-                                   const std::string& object) {
+std::optional<int64_t> ReadAttrInt(hid_t obj, const std::string& name, const Where& where, const std::string& object) {
   if (!AttrExists(obj, name)) return std::nullopt;
   Handle attr = OpenAttr(obj, name, where, object);
   Handle space = Own(H5Aget_space(attr.get()), H5Sclose, where, "cannot read attribute " + name + " of", object);
   if (H5Sget_simple_extent_npoints(space.get()) != 1) {
-    throw ParseError({where.file, std::nullopt, std::nullopt}, "attribute " + name + " of " + object + " is not a single number");
+    throw ParseError({where.file, std::nullopt, std::nullopt},
+                     "attribute " + name + " of " + object + " is not a single number");
   }
   Handle type = Own(H5Aget_type(attr.get()), H5Tclose, where, "cannot read attribute " + name + " of", object);
   H5T_class_t cls = H5Tget_class(type.get());
@@ -272,7 +273,8 @@ std::optional<int64_t> ReadAttrInt(hid_t obj, const std::string& name, const Whe
     return static_cast<int64_t>(v);
   }
   if (cls != H5T_INTEGER) {
-    throw ParseError({where.file, std::nullopt, std::nullopt}, "attribute " + name + " of " + object + " is not a number");
+    throw ParseError({where.file, std::nullopt, std::nullopt},
+                     "attribute " + name + " of " + object + " is not a number");
   }
   int64_t v = 0;
   Check(H5Aread(attr.get(), H5T_NATIVE_INT64, &v), where, "cannot read attribute " + name + " of", object);
@@ -297,7 +299,8 @@ std::optional<std::string> ReadAttrString(hid_t obj, const std::string& name, co
   if (!AttrExists(obj, name)) return std::nullopt;
   std::vector<std::string> v = ReadAttrStrings(obj, name, where, object);
   if (v.size() != 1) {
-    throw ParseError({where.file, std::nullopt, std::nullopt}, "attribute " + name + " of " + object + " is not a single string");
+    throw ParseError({where.file, std::nullopt, std::nullopt},
+                     "attribute " + name + " of " + object + " is not a single string");
   }
   return v.front();
 }

@@ -59,8 +59,7 @@ struct Where {
 };
 
 // Throws IoError("<file>: <what> <object>: <hdf5 message>") when id < 0.
-Handle Own(hid_t id, Handle::Closer closer, const Where& where, const std::string& what,
-           const std::string& object);
+Handle Own(hid_t id, Handle::Closer closer, const Where& where, const std::string& what, const std::string& object);
 void Check(herr_t status, const Where& where, const std::string& what, const std::string& object);
 
 // Object tree.
@@ -81,10 +80,8 @@ void WriteAttr(hid_t obj, const std::string& name, const std::string& value, con
 void WriteAttr(hid_t obj, const std::string& name, const std::vector<std::string>& values, const Where& where,
                const std::string& object);
 bool AttrExists(hid_t obj, const std::string& name);
-std::optional<double> ReadAttrDouble(hid_t obj, const std::string& name, const Where& where,
-                                     const std::string& object);
-std::optional<int64_t> ReadAttrInt(hid_t obj, const std::string& name, const Where& where,
-                                   const std::string& object);
+std::optional<double> ReadAttrDouble(hid_t obj, const std::string& name, const Where& where, const std::string& object);
+std::optional<int64_t> ReadAttrInt(hid_t obj, const std::string& name, const Where& where, const std::string& object);
 std::optional<std::string> ReadAttrString(hid_t obj, const std::string& name, const Where& where,
                                           const std::string& object);
 std::vector<std::string> ReadAttrStrings(hid_t obj, const std::string& name, const Where& where,
@@ -96,8 +93,7 @@ void WriteStrings(hid_t loc, const std::string& name, const std::vector<std::str
 void WriteDoubles(hid_t loc, const std::string& name, const std::vector<double>& values, const Where& where,
                   const std::string& object);
 // Reads variable- or fixed-length strings of any cset.
-std::vector<std::string> ReadStrings(hid_t loc, const std::string& name, const Where& where,
-                                     const std::string& object);
+std::vector<std::string> ReadStrings(hid_t loc, const std::string& name, const Where& where, const std::string& object);
 std::vector<double> ReadDoubles(hid_t loc, const std::string& name, const Where& where, const std::string& object);
 
 // Variable-length UTF-8 string type.

@@ -496,7 +496,7 @@ TEST(Corpus, SecondConcurrentTransactionIsRefused) {
   const std::string path = (dir / "c.h5").string();
   CorpusTransaction first(path);
   std::string message = ErrorOf([&] { CorpusTransaction second(path); });
-  EXPECT_NE(message.find("another process is writing"), std::string::npos) << message;
+  EXPECT_NE(message.find("another transaction (in this or another process) is writing"), std::string::npos) << message;
   EXPECT_NE(message.find(path), std::string::npos) << message;
 }
 
