@@ -1,0 +1,523 @@
+#include "workbench/gui/main_window.h"
+
+#include <QAction>
+#include <QApplication>
+#include <QCheckBox>
+#include <QCloseEvent>
+#include <QComboBox>
+#include <QDialog>
+#include <QDialogButtonBox>
+#include <QDockWidget>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QFormLayout>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QLineEdit>
+#include <QListWidget>
+#include <QMenuBar>
+#include <QProgressDialog>
+#include <QPushButton>
+#include <QSettings>
+#include <QStatusBar>
+#include <QToolButton>
+#include <QVBoxLayout>
+#include <cmath>
+
+#include "core/error.h"
+#include "workbench/gui/corpus_browser.h"
+#include "workbench/gui/figure_export.h"
+#include "workbench/gui/import_runner.h"
+#include "workbench/gui/log_panel.h"
+#include "workbench/gui/marker_view.h"
+#include "workbench/gui/playback.h"
+#include "workbench/gui/timeseries_panel.h"
+
+namespace csw::gui {
+
+namespace {
+constexpr int kMaxRecent = 8;
+const char* kFigureFilter = "PNG image (*.png);;SVG drawing (*.svg);;PDF document (*.pdf)";
+}  // namespace
+
+MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWindow(parent) {
+  setObjectName("mainWindow");
+  settings_ = settings_path.isEmpty() ? std::make_unique<QSettings>("csw", "csw-workbench")
+                                      : std::make_unique<QSettings>(settings_path, QSettings::IniFormat);
+  setDockOptions(QMainWindow::AnimatedDocks | QMainWindow::AllowTabbedDocks | QMainWindow::AllowNestedDocks);
+
+  marker_view_ = new MarkerView(this);
+  marker_view_->setObjectName("markerView");
+  setCentralWidget(marker_view_);
+
+  browser_ = new CorpusBrowser(this);
+  takes_dock_ = new QDockWidget(tr("Takes"), this);
+  takes_dock_->setObjectName("takesDock");
+  takes_dock_->setWidget(browser_);
+  addDockWidget(Qt::LeftDockWidgetArea, takes_dock_);
+
+  // The time-series dock: a small bar choosing the marker lane, then the plots.
+  auto* plots_box = new QWidget(this);
+  auto* plots_layout = new QVBoxLayout(plots_box);
+  plots_layout->setContentsMargins(2, 2, 2, 2);
+  auto* bar = new QHBoxLayout();
+  marker_combo_ = new QComboBox(plots_box);
+  marker_combo_->setObjectName("markerCombo");
+  marker_combo_->setMinimumContentsLength(14);
+  marker_combo_->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+  quantity_combo_ = new QComboBox(plots_box);
+  quantity_combo_->setObjectName("quantityCombo");
+  for (auto q : {MarkerQuantity::kX, MarkerQuantity::kY, MarkerQuantity::kZ, MarkerQuantity::kSpeed})
+    quantity_combo_->addItem(QuantityName(q), static_cast<int>(q));
+  quantity_combo_->setCurrentIndex(2);
+  auto* show_all = new QToolButton(plots_box);
+  show_all->setText(tr("Show all"));
+  bar->addWidget(new QLabel(tr("Marker:"), plots_box));
+  bar->addWidget(marker_combo_);
+  bar->addWidget(quantity_combo_);
+  bar->addStretch(1);
+  bar->addWidget(show_all);
+  plots_layout->addLayout(bar);
+  plots_ = new TimeSeriesPanel(plots_box);
+  plots_layout->addWidget(plots_, 1);
+  plots_dock_ = new QDockWidget(tr("Time series"), this);
+  plots_dock_->setObjectName("plotsDock");
+  plots_dock_->setWidget(plots_box);
+  addDockWidget(Qt::BottomDockWidgetArea, plots_dock_);
+
+  log_ = new LogPanel(this);
+  log_dock_ = new QDockWidget(tr("Log"), this);
+  log_dock_->setObjectName("logDock");
+  log_dock_->setWidget(log_);
+  addDockWidget(Qt::BottomDockWidgetArea, log_dock_);
+  splitDockWidget(plots_dock_, log_dock_, Qt::Vertical);
+  resizeDocks({plots_dock_, log_dock_}, {300, 90}, Qt::Vertical);
+  resizeDocks({takes_dock_}, {380}, Qt::Horizontal);
+
+  playback_ = new Playback(this);
+  import_runner_ = new ImportRunner(this);
+  frame_label_ = new QLabel(this);
+  statusBar()->addPermanentWidget(frame_label_);
+
+  connect(browser_, &CorpusBrowser::TakeSelected, this, [this](const QString& name) { SelectTake(name); });
+  connect(playback_, &Playback::FrameChanged, this, &MainWindow::OnFrameChanged);
+  connect(playback_, &Playback::Note, log_, &LogPanel::Info);
+  connect(plots_, &TimeSeriesPanel::TimeClicked, playback_, &Playback::SeekTime);
+  connect(marker_view_, &MarkerView::MarkerPicked, this, &MainWindow::OnMarkerPicked);
+  connect(marker_combo_, qOverload<int>(&QComboBox::activated), this, [this](int) { OnMarkerSeriesChosen(); });
+  connect(quantity_combo_, qOverload<int>(&QComboBox::activated), this, [this](int) { OnMarkerSeriesChosen(); });
+  connect(show_all, &QToolButton::clicked, plots_, &TimeSeriesPanel::ShowAll);
+
+  connect(import_runner_, &ImportRunner::ProgressChanged, this, [this](const QString& stage, double fraction) {
+    if (import_progress_ == nullptr) return;
+    import_progress_->setLabelText(stage);
+    import_progress_->setValue(static_cast<int>(std::lround(fraction * 1000)));
+  });
+  auto finish = [this] {
+    if (import_progress_ != nullptr) {
+      import_progress_->hide();
+      import_progress_->deleteLater();
+      import_progress_ = nullptr;
+    }
+  };
+  connect(import_runner_, &ImportRunner::Succeeded, this,
+          [this, finish](const QStringList& takes, const QStringList& warnings) {
+            finish();
+            for (const QString& w : warnings) log_->Warning(w);
+            QString corpus = QString::fromStdString(import_runner_->options().corpus);
+            log_->Info(tr("Imported %n take(s) into %1: %2", nullptr, static_cast<int>(takes.size()))
+                           .arg(corpus, takes.join(", ")));
+            if (OpenCorpus(corpus) && !takes.isEmpty()) browser_->SelectTake(takes.front());
+            emit ImportFinished();
+          });
+  connect(import_runner_, &ImportRunner::Canceled, this, [this, finish] {
+    finish();
+    log_->Info(tr("Import cancelled: %1 was left unchanged.")
+                   .arg(QString::fromStdString(import_runner_->options().corpus)));
+    emit ImportFinished();
+  });
+  connect(import_runner_, &ImportRunner::Failed, this, [this, finish](const QString& message) {
+    finish();
+    log_->Error(tr("Import failed: %1").arg(message));
+    statusBar()->showMessage(tr("Import failed — see the log"), 8000);
+    emit ImportFinished();
+  });
+
+  BuildMenus();
+  RestoreLayout();
+  UpdateTitle();
+  OnFrameChanged(0);
+}
+
+MainWindow::~MainWindow() = default;
+
+void MainWindow::BuildMenus() {
+  QMenu* file = menuBar()->addMenu(tr("&File"));
+  file->addAction(tr("&Open Corpus…"), QKeySequence::Open, this, &MainWindow::ChooseAndOpen);
+  recent_menu_ = file->addMenu(tr("Open &Recent"));
+  file->addAction(tr("&Import…"), QKeySequence(Qt::CTRL | Qt::Key_I), this, &MainWindow::ShowImportDialog);
+  file->addAction(tr("Load &Marker Set…"), this, &MainWindow::ChooseMarkerSet);
+  file->addSeparator();
+  file->addAction(tr("&Export Plot Figure…"), QKeySequence(Qt::CTRL | Qt::Key_E), this,
+                  &MainWindow::ChooseAndExportPlot);
+  file->addAction(tr("Export &3D View Figure…"), this, &MainWindow::ChooseAndExport3d);
+  file->addSeparator();
+  file->addAction(tr("&Quit"), QKeySequence::Quit, this, &QWidget::close);
+  UpdateRecentMenu();
+
+  QMenu* view = menuBar()->addMenu(tr("&View"));
+  view->addAction(takes_dock_->toggleViewAction());
+  view->addAction(plots_dock_->toggleViewAction());
+  view->addAction(log_dock_->toggleViewAction());
+  view->addSeparator();
+  QAction* perspective = view->addAction(tr("&Perspective"));
+  perspective->setCheckable(true);
+  perspective->setChecked(marker_view_->camera().perspective);
+  connect(perspective, &QAction::toggled, marker_view_, &MarkerView::SetPerspective);
+  QAction* y_up = view->addAction(tr("Lab vertical is +&Y"));
+  y_up->setCheckable(true);
+  y_up->setChecked(settings_->value("view/yUp", false).toBool());
+  marker_view_->SetYUp(y_up->isChecked());
+  connect(y_up, &QAction::toggled, this, [this](bool on) {
+    marker_view_->SetYUp(on);
+    marker_view_->ResetView();
+    settings_->setValue("view/yUp", on);
+  });
+  view->addAction(tr("&Reset 3D View"), QKeySequence(Qt::Key_R), marker_view_, &MarkerView::ResetView);
+  view->addSeparator();
+  view->addAction(tr("Zoom Plots &In"), QKeySequence::ZoomIn, this,
+                  [this] { plots_->ZoomTime(0.5, plots_->cursor_time()); });
+  view->addAction(tr("Zoom Plots &Out"), QKeySequence::ZoomOut, this,
+                  [this] { plots_->ZoomTime(2.0, plots_->cursor_time()); });
+  view->addAction(tr("Show &Whole Take"), QKeySequence(Qt::CTRL | Qt::Key_0), plots_, &TimeSeriesPanel::ShowAll);
+
+  QMenu* play = menuBar()->addMenu(tr("&Playback"));
+  play_action_ = play->addAction(tr("&Play / Pause"), QKeySequence(Qt::Key_Space), playback_, &Playback::Toggle);
+  play->addAction(tr("Step &Forward"), QKeySequence(Qt::Key_Right), this, [this] { playback_->Step(1); });
+  play->addAction(tr("Step &Back"), QKeySequence(Qt::Key_Left), this, [this] { playback_->Step(-1); });
+  play->addAction(tr("Forward 10 Frames"), QKeySequence(Qt::SHIFT | Qt::Key_Right), this,
+                  [this] { playback_->Step(10); });
+  play->addAction(tr("Back 10 Frames"), QKeySequence(Qt::SHIFT | Qt::Key_Left), this,
+                  [this] { playback_->Step(-10); });
+  play->addAction(tr("To &Start"), QKeySequence(Qt::Key_Home), this, [this] { playback_->Step(-playback_->frames()); });
+  play->addAction(tr("To &End"), QKeySequence(Qt::Key_End), this, [this] { playback_->Step(playback_->frames()); });
+}
+
+void MainWindow::RestoreLayout() {
+  QByteArray geometry = settings_->value("window/geometry").toByteArray();
+  if (!geometry.isEmpty()) {
+    restoreGeometry(geometry);
+  } else {
+    resize(1400, 900);
+  }
+  QByteArray state = settings_->value("window/state").toByteArray();
+  if (!state.isEmpty()) restoreState(state);
+  QString set = settings_->value("markerSet").toString();
+  if (!set.isEmpty() && QFileInfo::exists(set)) LoadMarkerSetFile(set);
+}
+
+void MainWindow::SaveLayout() {
+  settings_->setValue("window/geometry", saveGeometry());
+  settings_->setValue("window/state", saveState());
+  settings_->sync();
+}
+
+void MainWindow::closeEvent(QCloseEvent* event) {
+  playback_->Pause();
+  import_runner_->Cancel();
+  SaveLayout();
+  event->accept();
+}
+
+QStringList MainWindow::recent_files() const { return settings_->value("recentFiles").toStringList(); }
+
+void MainWindow::AddRecent(const QString& path) {
+  QString abs = QFileInfo(path).absoluteFilePath();
+  QStringList list = recent_files();
+  list.removeAll(abs);
+  list.prepend(abs);
+  while (list.size() > kMaxRecent) list.removeLast();
+  settings_->setValue("recentFiles", list);
+  UpdateRecentMenu();
+}
+
+void MainWindow::UpdateRecentMenu() {
+  if (recent_menu_ == nullptr) return;
+  recent_menu_->clear();
+  const QStringList list = recent_files();
+  for (const QString& path : list) {
+    recent_menu_->addAction(path, this, [this, path] { OpenCorpus(path); });
+  }
+  recent_menu_->setEnabled(!list.isEmpty());
+}
+
+QString MainWindow::corpus_path() const {
+  return corpus_ ? QString::fromStdString(corpus_->path()) : QString();
+}
+
+void MainWindow::UpdateTitle() {
+  QString title = QStringLiteral("csw-workbench");
+  if (corpus_) title += QStringLiteral(" — ") + QFileInfo(corpus_path()).fileName();
+  if (take_) title += QStringLiteral(" — ") + QString::fromStdString(take_->name);
+  setWindowTitle(title);
+}
+
+bool MainWindow::OpenCorpus(const QString& path) {
+  try {
+    Corpus corpus = Corpus::Open(path.toStdString());
+    std::vector<TakeSummary> takes = corpus.Takes();
+    corpus_ = corpus;
+    take_.reset();
+    marker_view_->SetTake(nullptr);
+    plots_->SetTake(nullptr);
+    playback_->SetTake(0, 0, nullptr);
+    marker_combo_->clear();
+    browser_->SetTakes(takes);
+    AddRecent(path);
+    log_->Info(tr("Opened %1 (%n take(s))", nullptr, static_cast<int>(takes.size())).arg(path));
+    UpdateTitle();
+    if (!takes.empty()) browser_->SelectTake(QString::fromStdString(takes.front().name));
+    return true;
+  } catch (const std::exception& e) {
+    log_->Error(tr("Cannot open %1: %2").arg(path, QString::fromStdString(e.what())));
+    statusBar()->showMessage(tr("Cannot open %1 — see the log").arg(QFileInfo(path).fileName()), 8000);
+    return false;
+  }
+}
+
+bool MainWindow::SelectTake(const QString& name) {
+  if (!corpus_) return false;
+  if (take_ && QString::fromStdString(take_->name) == name) return true;
+  std::shared_ptr<const Take> take;
+  try {
+    take = std::make_shared<const Take>(corpus_->LoadTake(name.toStdString()));
+  } catch (const std::exception& e) {
+    log_->Error(tr("Cannot load take %1: %2").arg(name, QString::fromStdString(e.what())));
+    return false;
+  }
+  playback_->Pause();
+  take_ = take;
+  try {
+    marker_view_->SetTake(take_, marker_set_ ? &*marker_set_ : nullptr);
+  } catch (const std::exception& e) {
+    log_->Warning(tr("Marker set not applied to %1: %2").arg(name, QString::fromStdString(e.what())));
+    marker_view_->SetTake(take_, nullptr);
+  }
+  plots_->SetTake(take_);
+  marker_combo_->clear();
+  marker_combo_->addItem(tr("(none)"), -1);
+  for (size_t k = 0; k < take_->marker_names.size(); ++k)
+    marker_combo_->addItem(QString::fromStdString(take_->marker_names[k]), static_cast<int>(k));
+  // Start with the first marker that has data, so the panel shows some motion.
+  int first_visible = -1;
+  for (int64_t k = 0; k < take_->markers.markers() && first_visible < 0; ++k) {
+    for (int64_t f = 0; f < take_->frames(); f += std::max<int64_t>(1, take_->frames() / 64)) {
+      if (take_->markers.Visible(f, k)) {
+        first_visible = static_cast<int>(k);
+        break;
+      }
+    }
+  }
+  if (first_visible >= 0) {
+    marker_combo_->setCurrentIndex(first_visible + 1);
+    OnMarkerSeriesChosen();
+  }
+  playback_->SetTake(take_->frames(), take_->rate_hz, &take_->audio);
+  if (browser_->current_take() != name) {
+    browser_->blockSignals(true);
+    browser_->SelectTake(name);
+    browser_->blockSignals(false);
+  }
+  UpdateTitle();
+  OnFrameChanged(playback_->frame());
+  emit TakeShown(name);
+  return true;
+}
+
+bool MainWindow::LoadMarkerSetFile(const QString& path) {
+  try {
+    marker_set_ = LoadMarkerSet(path.toStdString());
+  } catch (const std::exception& e) {
+    log_->Error(tr("Cannot load marker set %1: %2").arg(path, QString::fromStdString(e.what())));
+    return false;
+  }
+  settings_->setValue("markerSet", QFileInfo(path).absoluteFilePath());
+  log_->Info(tr("Marker set %1 loaded").arg(QString::fromStdString(marker_set_->name)));
+  if (take_) {
+    int64_t frame = playback_->frame();
+    try {
+      marker_view_->SetTake(take_, &*marker_set_);
+    } catch (const std::exception& e) {
+      log_->Warning(tr("Marker set not applied: %1").arg(QString::fromStdString(e.what())));
+      marker_view_->SetTake(take_, nullptr);
+    }
+    marker_view_->SetFrame(frame);
+  }
+  return true;
+}
+
+void MainWindow::OnFrameChanged(qint64 frame) {
+  marker_view_->SetFrame(frame);
+  if (take_ && take_->rate_hz > 0) {
+    double t = static_cast<double>(frame) / take_->rate_hz;
+    plots_->SetCursorTime(t);
+    frame_label_->setText(tr("frame %1  t = %2 s").arg(frame + take_->first_frame).arg(t, 0, 'f', 3));
+  } else {
+    frame_label_->setText(tr("no take"));
+  }
+  if (marker_view_->selected_marker() >= 0) statusBar()->showMessage(marker_view_->SelectionText());
+}
+
+void MainWindow::OnMarkerPicked(int marker) {
+  if (marker < 0) {
+    statusBar()->clearMessage();
+    return;
+  }
+  statusBar()->showMessage(marker_view_->SelectionText());
+  log_->Info(marker_view_->SelectionText() + tr(" (frame %1)").arg(playback_->frame() + take_->first_frame));
+  marker_combo_->setCurrentIndex(marker + 1);
+  OnMarkerSeriesChosen();
+}
+
+void MainWindow::OnMarkerSeriesChosen() {
+  int marker = marker_combo_->currentData().toInt();
+  auto q = static_cast<MarkerQuantity>(quantity_combo_->currentData().toInt());
+  if (marker == plots_->marker() && q == plots_->quantity()) return;
+  plots_->SetMarkerSeries(marker, q);
+  if (take_ && take_->rate_hz > 0) plots_->SetCursorTime(static_cast<double>(playback_->frame()) / take_->rate_hz);
+}
+
+bool MainWindow::StartImport(const jobs::ImportOptions& options) {
+  if (std::string why = options.Check(); !why.empty()) {
+    log_->Error(tr("Import not started: %1").arg(QString::fromStdString(why)));
+    return false;
+  }
+  if (!import_runner_->Start(options)) {
+    log_->Warning(tr("An import is already running."));
+    return false;
+  }
+  log_->Info(tr("Importing %n file(s) into %1…", nullptr, static_cast<int>(options.files.size()))
+                 .arg(QString::fromStdString(options.corpus)));
+  import_progress_ = new QProgressDialog(tr("Importing…"), tr("Cancel"), 0, 1000, this);
+  import_progress_->setObjectName("importProgress");
+  import_progress_->setWindowTitle(tr("Import"));
+  // Not modal: browsing and playback go on while the job runs.
+  import_progress_->setWindowModality(Qt::NonModal);
+  import_progress_->setAutoClose(false);
+  import_progress_->setAutoReset(false);
+  import_progress_->setMinimumDuration(0);
+  connect(import_progress_, &QProgressDialog::canceled, import_runner_, &ImportRunner::Cancel);
+  import_progress_->setValue(0);
+  import_progress_->show();
+  return true;
+}
+
+bool MainWindow::ExportPlot(const QString& path, int width, int height) {
+  try {
+    ExportFigure(plots_->plot(), path, width, height);
+  } catch (const std::exception& e) {
+    log_->Error(tr("Figure not saved: %1").arg(QString::fromStdString(e.what())));
+    return false;
+  }
+  log_->Info(tr("Figure saved to %1").arg(path));
+  return true;
+}
+
+bool MainWindow::Export3dView(const QString& path) {
+  try {
+    ExportPainted([this](QPainter& p, QSize s) { marker_view_->Render(p, s); }, marker_view_->size(), path);
+  } catch (const std::exception& e) {
+    log_->Error(tr("Figure not saved: %1").arg(QString::fromStdString(e.what())));
+    return false;
+  }
+  log_->Info(tr("Figure saved to %1").arg(path));
+  return true;
+}
+
+void MainWindow::ChooseAndOpen() {
+  QString path = QFileDialog::getOpenFileName(this, tr("Open Corpus"), settings_->value("lastDir").toString(),
+                                              tr("csw corpus (*.h5 *.hdf5);;All files (*)"));
+  if (path.isEmpty()) return;
+  settings_->setValue("lastDir", QFileInfo(path).absolutePath());
+  OpenCorpus(path);
+}
+
+void MainWindow::ChooseAndExportPlot() {
+  QString path = QFileDialog::getSaveFileName(this, tr("Export Plot Figure"), settings_->value("lastDir").toString(),
+                                              kFigureFilter);
+  if (!path.isEmpty()) ExportPlot(path);
+}
+
+void MainWindow::ChooseAndExport3d() {
+  QString path = QFileDialog::getSaveFileName(this, tr("Export 3D View Figure"),
+                                              settings_->value("lastDir").toString(), kFigureFilter);
+  if (!path.isEmpty()) Export3dView(path);
+}
+
+void MainWindow::ChooseMarkerSet() {
+  QString path = QFileDialog::getOpenFileName(this, tr("Load Marker Set"), settings_->value("lastDir").toString(),
+                                              tr("Marker set (*.json);;All files (*)"));
+  if (!path.isEmpty()) LoadMarkerSetFile(path);
+}
+
+void MainWindow::ShowImportDialog() {
+  QDialog dialog(this);
+  dialog.setWindowTitle(tr("Import"));
+  auto* form = new QFormLayout(&dialog);
+  auto* files = new QListWidget(&dialog);
+  auto* add = new QPushButton(tr("Add Files…"), &dialog);
+  auto* remove = new QPushButton(tr("Remove"), &dialog);
+  auto* file_buttons = new QHBoxLayout();
+  file_buttons->addWidget(add);
+  file_buttons->addWidget(remove);
+  file_buttons->addStretch(1);
+  auto* file_box = new QVBoxLayout();
+  file_box->addWidget(files);
+  file_box->addLayout(file_buttons);
+  form->addRow(tr("Files (captures with their\n.TextGrid/.eaf/.wav):"), file_box);
+  auto* corpus = new QLineEdit(corpus_path(), &dialog);
+  auto* corpus_browse = new QPushButton(tr("…"), &dialog);
+  auto* corpus_row = new QHBoxLayout();
+  corpus_row->addWidget(corpus);
+  corpus_row->addWidget(corpus_browse);
+  form->addRow(tr("Into corpus:"), corpus_row);
+  auto* markerset = new QLineEdit(settings_->value("markerSet").toString(), &dialog);
+  auto* set_browse = new QPushButton(tr("…"), &dialog);
+  auto* set_row = new QHBoxLayout();
+  set_row->addWidget(markerset);
+  set_row->addWidget(set_browse);
+  form->addRow(tr("Marker set (optional):"), set_row);
+  auto* replace = new QCheckBox(tr("Replace takes that already exist"), &dialog);
+  form->addRow(QString(), replace);
+  auto* buttons = new QDialogButtonBox(QDialogButtonBox::Ok | QDialogButtonBox::Cancel, &dialog);
+  buttons->button(QDialogButtonBox::Ok)->setText(tr("Import"));
+  form->addRow(buttons);
+  connect(buttons, &QDialogButtonBox::accepted, &dialog, &QDialog::accept);
+  connect(buttons, &QDialogButtonBox::rejected, &dialog, &QDialog::reject);
+  connect(add, &QPushButton::clicked, &dialog, [&] {
+    QStringList chosen = QFileDialog::getOpenFileNames(
+        &dialog, tr("Add Files"), settings_->value("lastDir").toString(),
+        tr("Captures and labels (*.c3d *.trc *.TextGrid *.eaf *.wav);;All files (*)"));
+    if (!chosen.isEmpty()) settings_->setValue("lastDir", QFileInfo(chosen.front()).absolutePath());
+    files->addItems(chosen);
+  });
+  connect(remove, &QPushButton::clicked, &dialog, [&] { qDeleteAll(files->selectedItems()); });
+  connect(corpus_browse, &QPushButton::clicked, &dialog, [&] {
+    QString p = QFileDialog::getSaveFileName(&dialog, tr("Corpus"), corpus->text(), tr("csw corpus (*.h5)"),
+                                             nullptr, QFileDialog::DontConfirmOverwrite);
+    if (!p.isEmpty()) corpus->setText(p);
+  });
+  connect(set_browse, &QPushButton::clicked, &dialog, [&] {
+    QString p = QFileDialog::getOpenFileName(&dialog, tr("Marker set"), markerset->text(), tr("Marker set (*.json)"));
+    if (!p.isEmpty()) markerset->setText(p);
+  });
+  if (dialog.exec() != QDialog::Accepted) return;
+  jobs::ImportOptions options;
+  for (int i = 0; i < files->count(); ++i) options.files.push_back(files->item(i)->text().toStdString());
+  options.corpus = corpus->text().toStdString();
+  options.markerset = markerset->text().toStdString();
+  options.replace = replace->isChecked();
+  StartImport(options);
+}
+
+}  // namespace csw::gui

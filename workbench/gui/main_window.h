@@ -1,0 +1,114 @@
+#pragma once
+// The workbench's main window: corpus browser, 3D view, time-series panel and
+// log as dockable views (layout remembered), recent files, background import
+// with progress and Cancel, playback and figure export.
+#include <QMainWindow>
+#include <memory>
+#include <optional>
+
+#include "core/markerset.h"
+#include "core/take.h"
+#include "io/corpus/corpus.h"
+#include "workbench/jobs/jobs.h"
+
+class QAction;
+class QComboBox;
+class QDockWidget;
+class QLabel;
+class QMenu;
+class QProgressDialog;
+class QSettings;
+
+namespace csw::gui {
+
+class CorpusBrowser;
+class ImportRunner;
+class LogPanel;
+class MarkerView;
+class Playback;
+class TimeSeriesPanel;
+
+class MainWindow : public QMainWindow {
+  Q_OBJECT
+
+ public:
+  // settings_path: an INI file for layout and recent files; empty = the user's
+  // standard settings (QSettings "csw"/"csw-workbench").
+  explicit MainWindow(const QString& settings_path = QString(), QWidget* parent = nullptr);
+  ~MainWindow() override;
+
+  // Opens a corpus; on failure logs the error, keeps the current corpus and returns false.
+  bool OpenCorpus(const QString& path);
+  // Loads and shows one take of the open corpus; false (and a log line) on failure.
+  bool SelectTake(const QString& name);
+  // Loads a marker-set JSON for sticks and cluster frames; false (and a log line) on failure.
+  bool LoadMarkerSetFile(const QString& path);
+  // Starts the import job in the background (progress dialog with Cancel).
+  bool StartImport(const jobs::ImportOptions& options);
+  // Saves the time-series panel / the 3D view as PNG, SVG or PDF; false (and a log line) on failure.
+  bool ExportPlot(const QString& path, int width = 0, int height = 0);
+  bool Export3dView(const QString& path);
+
+  QString corpus_path() const;
+  std::shared_ptr<const Take> take() const { return take_; }
+  QStringList recent_files() const;
+
+  CorpusBrowser* browser() const { return browser_; }
+  MarkerView* marker_view() const { return marker_view_; }
+  TimeSeriesPanel* plots() const { return plots_; }
+  LogPanel* log() const { return log_; }
+  Playback* playback() const { return playback_; }
+  ImportRunner* import_runner() const { return import_runner_; }
+  QProgressDialog* import_progress() const { return import_progress_; }
+  QComboBox* marker_combo() const { return marker_combo_; }
+  QComboBox* quantity_combo() const { return quantity_combo_; }
+  QDockWidget* takes_dock() const { return takes_dock_; }
+  QDockWidget* plots_dock() const { return plots_dock_; }
+  QDockWidget* log_dock() const { return log_dock_; }
+
+ signals:
+  void TakeShown(const QString& name);
+  void ImportFinished();
+
+ protected:
+  void closeEvent(QCloseEvent* event) override;
+
+ private:
+  void BuildMenus();
+  void SaveLayout();
+  void RestoreLayout();
+  void AddRecent(const QString& path);
+  void UpdateRecentMenu();
+  void OnFrameChanged(qint64 frame);
+  void OnMarkerPicked(int marker);
+  void OnMarkerSeriesChosen();
+  void ShowImportDialog();
+  void ChooseAndOpen();
+  void ChooseAndExportPlot();
+  void ChooseAndExport3d();
+  void ChooseMarkerSet();
+  void UpdateTitle();
+
+  std::unique_ptr<QSettings> settings_;
+  std::optional<Corpus> corpus_;
+  std::shared_ptr<const Take> take_;
+  std::optional<MarkerSet> marker_set_;
+
+  CorpusBrowser* browser_ = nullptr;
+  MarkerView* marker_view_ = nullptr;
+  TimeSeriesPanel* plots_ = nullptr;
+  LogPanel* log_ = nullptr;
+  Playback* playback_ = nullptr;
+  ImportRunner* import_runner_ = nullptr;
+  QProgressDialog* import_progress_ = nullptr;
+  QComboBox* marker_combo_ = nullptr;
+  QComboBox* quantity_combo_ = nullptr;
+  QDockWidget* takes_dock_ = nullptr;
+  QDockWidget* plots_dock_ = nullptr;
+  QDockWidget* log_dock_ = nullptr;
+  QMenu* recent_menu_ = nullptr;
+  QLabel* frame_label_ = nullptr;
+  QAction* play_action_ = nullptr;
+};
+
+}  // namespace csw::gui

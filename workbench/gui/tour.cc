@@ -1,0 +1,133 @@
+#include "workbench/gui/tour.h"
+
+#include <QApplication>
+#include <QDir>
+#include <QDockWidget>
+#include <QEventLoop>
+#include <QFile>
+#include <QTimer>
+#include <fstream>
+
+#include <qcustomplot.h>
+
+#include "core/error.h"
+#include "io/corpus/corpus.h"
+#include "workbench/gui/corpus_browser.h"
+#include "workbench/gui/demo_take.h"
+#include "workbench/gui/log_panel.h"
+#include "workbench/gui/main_window.h"
+#include "workbench/gui/marker_view.h"
+#include "workbench/gui/playback.h"
+#include "workbench/gui/timeseries_panel.h"
+
+namespace csw::gui {
+
+namespace {
+
+// Lets layouts, queued replots and paints settle before a screenshot (tour only).
+void Settle(int ms = 150) {
+  QEventLoop loop;
+  QTimer::singleShot(ms, &loop, &QEventLoop::quit);
+  loop.exec();
+}
+
+QString Shot(QWidget* widget, const QString& dir, const QString& name) {
+  Settle();
+  QString path = QDir(dir).filePath(name);
+  if (!widget->grab().save(path, "PNG")) throw IoError(path.toStdString(), "cannot write screenshot");
+  return path;
+}
+
+}  // namespace
+
+QStringList RunTour(const TourOptions& options) {
+  QDir().mkpath(options.out_dir);
+  QDir().mkpath(options.work_dir);
+  QString corpus = QDir(options.work_dir).filePath("demo.h5");
+  QFile::remove(corpus);
+
+  // 1. The synthetic take, written straight into a new corpus.
+  DemoTakeOptions demo;
+  demo.seconds = 30.0;
+  {
+    CorpusTransaction tx(corpus.toStdString());
+    tx.WriteTake(MakeDemoTake(demo));
+    tx.Commit();
+  }
+  QString set_path = QDir(options.work_dir).filePath("synthetic-cuer.json");
+  {
+    std::ofstream out(set_path.toStdString());
+    out << MarkerSetToJson(DemoMarkerSet());
+  }
+
+  QStringList written;
+  MainWindow window(QDir(options.work_dir).filePath("tour-settings.ini"));
+  window.resize(1600, 1000);
+  window.show();
+  window.playback()->SetAudioEnabled(false);
+  window.LoadMarkerSetFile(set_path);
+  if (!window.OpenCorpus(corpus)) throw Error("tour: cannot open the demo corpus");
+
+  // 2. Real captures through the background import job.
+  if (!options.captures.isEmpty()) {
+    jobs::ImportOptions import;
+    for (const QString& c : options.captures) import.files.push_back(c.toStdString());
+    import.corpus = corpus.toStdString();
+    QEventLoop loop;
+    QObject::connect(&window, &MainWindow::ImportFinished, &loop, &QEventLoop::quit);
+    if (window.StartImport(import)) loop.exec();
+  }
+
+  // 3. The main window on the synthetic take: a picked fingertip, its speed, mid-take.
+  window.browser()->SelectTake(QString::fromStdString(demo.name));
+  std::shared_ptr<const Take> take = window.take();
+  if (!take) throw Error("tour: the demo take did not load");
+  int tip = static_cast<int>(take->MarkerIndex("index_tip"));
+  window.marker_view()->Orbit(-25, 5);
+  window.playback()->Seek(static_cast<int64_t>(6.2 * take->rate_hz));
+  window.marker_view()->SelectMarker(tip);
+  window.marker_combo()->setCurrentIndex(tip + 1);
+  window.quantity_combo()->setCurrentIndex(3);  // speed
+  window.plots()->SetMarkerSeries(tip, MarkerQuantity::kSpeed);
+  window.plots()->SetTimeRange(4.0, 10.0);
+  window.plots()->SetCursorTime(6.2);
+  written << Shot(&window, options.out_dir, "01-main-window.png");
+
+  // 4. Zoomed plots: syllables, cues and the hand leading the voice.
+  window.plots()->SetTimeRange(5.6, 7.1);
+  window.plots()->SetCursorTime(6.2);
+  written << Shot(window.plots_dock(), options.out_dir, "02-plots-zoomed.png");
+
+  // 5. The 3D view alone, orbited, with a gap in the little finger.
+  window.marker_view()->Orbit(60, 10);
+  window.marker_view()->Zoom(1.6);
+  written << Shot(window.marker_view(), options.out_dir, "03-3d-view.png");
+
+  // 6. A real capture, when one was imported.
+  for (const QString& c : options.captures) {
+    QString name = QFileInfo(c).completeBaseName();
+    if (!window.browser()->SelectTake(name)) continue;
+    window.marker_view()->SetYUp(true);  // NaturalPoint / Motive captures are Y-up
+    window.marker_view()->ResetView();
+    window.marker_view()->Orbit(90, 0);
+    window.playback()->Seek(window.playback()->frames() / 3);
+    written << Shot(&window, options.out_dir, "04-real-capture.png");
+    window.marker_view()->SetYUp(false);
+    break;
+  }
+
+  // 7. A damaged file: the error lands in the log and the window stays usable.
+  QString damaged = options.damaged_file;
+  if (damaged.isEmpty()) {
+    damaged = QDir(options.work_dir).filePath("damaged.h5");
+    QFile f(damaged);
+    if (f.open(QIODevice::WriteOnly)) f.write("\x89HDF\r\n\x1a\nthis corpus was cut off here");
+  }
+  window.OpenCorpus(damaged);
+  window.browser()->SelectTake(QString::fromStdString(demo.name));
+  written << Shot(&window, options.out_dir, "05-damaged-file.png");
+  window.close();
+  return written;
+}
+
+}  // namespace csw::gui
