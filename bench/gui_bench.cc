@@ -1,0 +1,135 @@
+// csw-workbench responsiveness, offscreen (QT_QPA_PLATFORM=offscreen unless set):
+//  - OpenCorpusShowFirstTake: a shown main window opens a corpus of three takes
+//    (113 markers at 120 Hz, 16 kHz audio, tiers) and has drawn the first take
+//    (browser filled, take loaded, 3D view and plots painted);
+//  - PlaybackFrame: one playback frame of a 10-minute take (113 markers at
+//    120 Hz) with three plot lanes (audio, one tier, one marker's speed) over a
+//    10 s window: frame advance, 3D repaint, cursor repaint (and a full replot
+//    each time the cursor pages). items_per_second is the sustainable frame rate.
+// Links csw_gui (workbench/gui/CMakeLists.txt adds it to this target).
+#include <benchmark/benchmark.h>
+
+#ifdef CSW_HAVE_GUI
+#include <qcustomplot.h>
+
+#include <QApplication>
+#include <QEvent>
+#include <QWindow>
+#include <filesystem>
+#include <string>
+
+#include "io/corpus/corpus.h"
+#include "workbench/gui/demo_take.h"
+#include "workbench/gui/main_window.h"
+#include "workbench/gui/marker_view.h"
+#include "workbench/gui/playback.h"
+#include "workbench/gui/timeseries_panel.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A corpus of three synthetic takes; the first (alphabetically) lasts `seconds`.
+std::string MakeCorpus(double seconds, bool one_tier) {
+  std::string path = (fs::temp_directory_path() / ("csw_gui_bench_" + std::to_string(static_cast<int>(seconds)) +
+                                                   (one_tier ? "_1tier" : "") + ".h5"))
+                         .string();
+  if (fs::exists(path)) return path;
+  csw::CorpusTransaction tx(path);
+  for (int i = 0; i < 3; ++i) {
+    csw::gui::DemoTakeOptions o;
+    o.name = "take" + std::to_string(i);
+    o.seconds = i == 0 ? seconds : 20.0;
+    csw::Take t = csw::gui::MakeDemoTake(o);
+    if (one_tier) t.tiers = {t.tiers[1]};  // syllables only: audio + tier + marker = three lanes
+    tx.WriteTake(t);
+  }
+  tx.Commit();
+  return path;
+}
+
+// Counts the paint events a widget really receives (repaint() is a no-op on an unexposed window).
+class PaintCounter : public QObject {
+ public:
+  int64_t paints = 0;
+  bool eventFilter(QObject*, QEvent* e) override {
+    paints += e->type() == QEvent::Paint;
+    return false;
+  }
+};
+
+// Shows a window and lets the platform expose it (paints only reach exposed windows).
+void ShowExposed(QWidget& window) {
+  window.resize(1600, 1000);
+  window.show();
+  for (int i = 0; i < 200 && !(window.windowHandle() && window.windowHandle()->isExposed()); ++i)
+    QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
+  QCoreApplication::processEvents();
+}
+
+QString SettingsPath() { return QString::fromStdString((fs::temp_directory_path() / "csw_gui_bench.ini").string()); }
+
+void BM_OpenCorpusShowFirstTake(benchmark::State& state) {
+  std::string corpus = MakeCorpus(static_cast<double>(state.range(0)), false);
+  csw::gui::MainWindow window(SettingsPath());
+  ShowExposed(window);
+  for (auto _ : state) {
+    if (!window.OpenCorpus(QString::fromStdString(corpus))) state.SkipWithError("cannot open the corpus");
+    window.marker_view()->repaint();
+    window.plots()->plot()->replot(QCustomPlot::rpImmediateRefresh);
+    benchmark::DoNotOptimize(window.take());
+    state.PauseTiming();
+    QCoreApplication::processEvents();  // drop the queued repaints before the next round
+    state.ResumeTiming();
+  }
+  state.counters["frames"] = static_cast<double>(window.take()->frames());
+}
+BENCHMARK(BM_OpenCorpusShowFirstTake)->Arg(60)->Arg(600)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_PlaybackFrame(benchmark::State& state) {
+  std::string corpus = MakeCorpus(600.0, true);
+  csw::gui::MainWindow window(SettingsPath());
+  ShowExposed(window);
+  if (!window.OpenCorpus(QString::fromStdString(corpus))) state.SkipWithError("cannot open the corpus");
+  csw::gui::TimeSeriesPanel* plots = window.plots();
+  plots->SetMarkerSeries(static_cast<int>(window.take()->MarkerIndex("index_tip")), csw::gui::MarkerQuantity::kSpeed);
+  plots->SetTimeRange(0.0, 10.0);
+  if (plots->lane_count() != 3 || window.take()->markers.markers() != 113) state.SkipWithError("unexpected set-up");
+  csw::gui::Playback* playback = window.playback();
+  int64_t frames = playback->frames();
+  PaintCounter view_paints, plot_paints;
+  window.marker_view()->installEventFilter(&view_paints);
+  plots->plot()->installEventFilter(&plot_paints);
+  for (auto _ : state) {
+    int64_t next = playback->frame() + 1;
+    playback->Seek(next < frames ? next : 0);
+    window.marker_view()->repaint();
+    plots->plot()->repaint();
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.counters["view_paints_per_frame"] = static_cast<double>(view_paints.paints) / static_cast<double>(state.iterations());
+  state.counters["plot_paints_per_frame"] = static_cast<double>(plot_paints.paints) / static_cast<double>(state.iterations());
+  state.counters["lanes"] = plots->lane_count();
+  state.counters["markers"] = static_cast<double>(window.take()->markers.markers());
+}
+BENCHMARK(BM_PlaybackFrame)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM")) qputenv("QT_QPA_PLATFORM", "offscreen");
+  QApplication app(argc, argv);
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
+
+#else
+#include <cstdio>
+// Built with CSW_BUILD_GUI=OFF: there is no GUI to measure.
+int main() {
+  std::fprintf(stderr, "bench_gui: csw was configured with CSW_BUILD_GUI=OFF; nothing to measure\n");
+  return 0;
+}
+#endif
