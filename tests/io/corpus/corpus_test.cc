@@ -3,12 +3,15 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
+#include <atomic>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/error.h"
@@ -498,6 +501,38 @@ TEST(Corpus, SecondConcurrentTransactionIsRefused) {
   std::string message = ErrorOf([&] { CorpusTransaction second(path); });
   EXPECT_NE(message.find("another transaction (in this or another process) is writing"), std::string::npos) << message;
   EXPECT_NE(message.find(path), std::string::npos) << message;
+}
+
+TEST(Corpus, ReadersAndAWriterInDifferentThreads) {
+  TempDir dir;
+  const std::string path = (dir / "c.h5").string();
+  const std::string other = (dir / "other.h5").string();
+  Take t = MakeFullTake("t", 3000, 8);
+  WriteCorpus(path, {t});
+  Corpus corpus = Corpus::Open(path);
+  std::atomic<int> mismatches{0};
+  auto reader = [&](int64_t first) {
+    for (int i = 0; i < 20; ++i) {
+      MarkerArray w = corpus.LoadMarkers("t", first, 500);
+      if (std::memcmp(w.data().data(), t.markers.data().data() + first * 24, w.data().size() * sizeof(float)) != 0) {
+        ++mismatches;
+      }
+    }
+  };
+  std::thread r1(reader, 0);
+  std::thread r2(reader, 1700);
+  std::thread writer([&] {
+    for (int i = 0; i < 5; ++i) {
+      CorpusTransaction tx(other);
+      tx.WriteTake(MakeFullTake("w" + std::to_string(i), 500, 8));
+      tx.Commit();
+    }
+  });
+  r1.join();
+  r2.join();
+  writer.join();
+  EXPECT_EQ(mismatches.load(), 0);
+  EXPECT_EQ(Corpus::Open(other).Takes().size(), 5u);
 }
 
 TEST(Corpus, NonHdf5FileGivesOneClearError) {
