@@ -115,8 +115,9 @@ void ApplyCaptureArtefacts(const VirtualCuer& cuer, const CaptureSetup& setup, s
   std::vector<bool> is_throat(static_cast<size_t>(nf), false);
   const Eigen::Vector3d hr = fm.head_radii(), hc = fm.head_centre();
   for (int i = 0; i < nf; ++i) {
-    Eigen::Vector3d p = fm.neutral().col(i);
-    const std::string& name = fm.marker_names()[static_cast<size_t>(i)];
+    const int k = r.face_markers[static_cast<size_t>(i)];
+    Eigen::Vector3d p = fm.neutral().col(k);
+    const std::string& name = fm.marker_names()[static_cast<size_t>(k)];
     if (std::find(fm.throat_markers().begin(), fm.throat_markers().end(), name) != fm.throat_markers().end()) {
       is_throat[static_cast<size_t>(i)] = true;
       face_normal[static_cast<size_t>(i)] = Eigen::Vector3d(p.x(), p.y() - 5.0, 0.0).normalized();

@@ -1,6 +1,8 @@
 // Outputs of the virtual cuer: label tiers, ground truth, files per take, whole
 // corpora and the demo corpus.
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -30,8 +32,15 @@ const char* KeyTypeName(KeyType t) {
   return "";
 }
 
-// Rounds for compact, deterministic JSON.
-double Round(double v, double step) { return std::round(v / step) * step; }
+// Rounds to a decimal step (1e-k) for compact, deterministic JSON: the result is
+// the double nearest the rounded decimal, which prints in few digits.
+double Round(double v, double step) {
+  const int digits = std::max(0, static_cast<int>(std::lround(-std::log10(step))));
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  double r = std::strtod(buf, nullptr);
+  return r == 0.0 ? 0.0 : r;  // no "-0.0"
+}
 
 void ExtendTier(LabelTier* tier, double end) {
   tier->start_s = 0.0;
@@ -140,12 +149,13 @@ std::string TruthToJson(const SimulationResult& r) {
   for (const Phone& p : r.utterance.phones) phones.push_back({{"ipa", p.ipa}, {"start_s", p.start_s}, {"end_s", p.end_s}});
   j["phones"] = phones;
   j["joint_names"] = r.joint_angles.cols() > 0 ? r.joint_names : std::vector<std::string>{};
-  j["joint_angles"] = Matrix(r.joint_angles, 1e-5);
+  j["joint_angles"] = Matrix(r.joint_angles, 1e-4);
   std::vector<std::string> art;
   for (int k = 0; k < kNumArticulatory; ++k) art.emplace_back(ArticulatoryName(k));
+  // (precision: 1e-4 rad, 1e-3 mm, 1e-5 rad of head rotation: far below the capture noise)
   j["articulatory_names"] = art;
-  j["articulation"] = Matrix(r.articulation, 1e-4);
-  j["head_motion"] = Matrix(r.head_motion, 1e-6);
+  j["articulation"] = Matrix(r.articulation, 1e-3);
+  j["head_motion"] = Matrix(r.head_motion, 1e-5);
   j["forearm_pose"] = Matrix(r.forearm_pose, 1e-4);
   // Occlusion mask as runs per marker: [first_frame, end_frame, state].
   json mask = json::object();
@@ -170,7 +180,7 @@ std::string TruthToJson(const SimulationResult& r) {
                      {"first_frame", s.first_frame},
                      {"end_frame", s.end_frame}});
   j["label_swaps"] = swaps;
-  return j.dump(0);
+  return j.dump();
 }
 
 void WriteTakeFiles(const SimulationResult& result, const SimulateOptions& options, const std::string& dir) {
@@ -253,7 +263,7 @@ std::vector<std::string> SimulateCorpus(const SimulateOptions& options, const st
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) throw IoError(out_dir, "cannot create the output folder: " + ec.message());
-  WriteText((fs::path(out_dir) / "markerset.json").string(), MarkerSetToJson(cuer.MakeMarkerSet()));
+  WriteText((fs::path(out_dir) / "markerset.json").string(), MarkerSetToJson(cuer.MakeMarkerSet(options.kind)));
   std::vector<std::string> names;
   const std::string stage = std::string("simulate ") + CorpusKindName(options.kind);
   progress.Update(stage, 0.0);

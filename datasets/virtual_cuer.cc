@@ -100,6 +100,7 @@ std::string SimulateOptions::Check() const {
   if (!(dropouts_per_s >= 0.0 && dropouts_per_s <= 10.0)) return "dropouts_per_s must be in [0, 10]";
   if (count < 0) return "count must be >= 0";
   if (speech_rate_wpm < 80 || speech_rate_wpm > 450) return "speech_rate_wpm must be in [80, 450]";
+  if (viseme_rate_wpm < 80 || viseme_rate_wpm > 450) return "viseme_rate_wpm must be in [80, 450]";
   if (!(lead_in_s >= 0.3 && lead_in_s <= 10.0)) return "lead_in_s must be in [0.3, 10] s";
   if (std::string why = phasing.Check(); !why.empty()) return "phasing: " + why;
   for (const auto& s : sentences)
@@ -123,26 +124,33 @@ std::vector<std::string> VirtualCuer::AllMarkerNames() const {
   return out;
 }
 
-MarkerSet VirtualCuer::MakeMarkerSet() const {
+MarkerSet VirtualCuer::MakeMarkerSet(CorpusKind kind) const {
+  const bool face = kind != CorpusKind::kShapes, hand = kind != CorpusKind::kVisemes;
   MarkerSet set;
   set.name = "csw-virtual-cuer";
   set.description = "Virtual cuer (csw datasets): " + std::to_string(face_.num_markers()) +
                     " face, head and throat markers and " + std::to_string(hand_.num_markers()) +
                     " right hand and forearm markers";
   set.head_cluster = face_.rigid_markers();
-  set.face = face_.face_markers();
-  for (const auto& t : face_.throat_markers()) {
+  if (face) set.face = face_.face_markers();
+  for (const auto& t : face ? face_.throat_markers() : std::vector<std::string>{}) {
     ThroatMarker tm;
     tm.marker = t;
     tm.head_weight = face_.head_weights()[face_.MarkerIndex(t)];
     set.throat.push_back(tm);
   }
-  set.forearm_cluster = hand_.forearm_markers();
-  for (const auto& s : hand_.segments()) set.hand_segments.push_back({s.name, s.parent, s.markers});
-  set.fingertips = hand_.fingertip_markers();
-  set.palm = hand_.palm_markers();
-  set.sticks = face_.sticks();
-  set.sticks.insert(set.sticks.end(), hand_.sticks().begin(), hand_.sticks().end());
+  if (hand) {
+    set.forearm_cluster = hand_.forearm_markers();
+    for (const auto& s : hand_.segments()) set.hand_segments.push_back({s.name, s.parent, s.markers});
+    set.fingertips = hand_.fingertip_markers();
+    set.palm = hand_.palm_markers();
+    set.sticks.insert(set.sticks.end(), hand_.sticks().begin(), hand_.sticks().end());
+  }
+  const auto& rigid = face_.rigid_markers();
+  for (const auto& [a, b] : face_.sticks()) {
+    bool rigid_pair = std::find(rigid.begin(), rigid.end(), a) != rigid.end() && std::find(rigid.begin(), rigid.end(), b) != rigid.end();
+    if (face || rigid_pair) set.sticks.emplace_back(a, b);
+  }
   return set;
 }
 
@@ -234,12 +242,13 @@ struct VirtualCuer::Script {
   std::vector<Key> keys;         // capture clock
   std::vector<KeyTiming> timing;
   std::vector<int> pose_placement;  // placement definition used for each key's pose
+  bool rigid_head_only = false;     // capture only the rigid head markers of the face
   double duration_s = 0.0;
 };
 
 SimulationResult VirtualCuer::SimulateSentence(const std::string& name, const std::string& text, bool cued) const {
   PhonetiseOptions po;
-  po.rate_wpm = options_.speech_rate_wpm;
+  po.rate_wpm = cued ? options_.speech_rate_wpm : options_.viseme_rate_wpm;
   po.synthesize_audio = options_.audio;
   Utterance u = Phonetise(text, po);
   return SimulateUtterance(name, u, cued);
@@ -264,7 +273,7 @@ SimulationResult VirtualCuer::SimulateUtterance(const std::string& name, const U
     for (const Key& k : s.keys) s.pose_placement.push_back(k.placement);
     for (const KeyTiming& t : s.timing) end = std::max({end, t.placement_target_s, t.shape_target_s});
   }
-  s.duration_s = end + lead;
+  s.duration_s = end + 0.5 * lead;
   return Run(name, s);
 }
 
@@ -312,7 +321,8 @@ SimulationResult VirtualCuer::SimulateShapes(const std::string& name, const std:
   s.keys.push_back(last);
   s.timing.push_back(back);
   s.pose_placement.push_back(0);
-  s.duration_s = back.shape_target_s + lead;
+  s.duration_s = back.shape_target_s + 0.5 * lead;
+  s.rigid_head_only = true;
   return Run(name, s);
 }
 
@@ -322,7 +332,14 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
   SimulationResult r;
   const double rate = options_.rate_hz;
   const auto frames = static_cast<int64_t>(std::ceil(script.duration_s * rate));
-  const int nf = face_.num_markers();
+  std::vector<int> face_idx;
+  for (int i = 0; i < face_.num_markers(); ++i) {
+    const std::string& n = face_.marker_names()[static_cast<size_t>(i)];
+    if (!script.rigid_head_only ||
+        std::find(face_.rigid_markers().begin(), face_.rigid_markers().end(), n) != face_.rigid_markers().end())
+      face_idx.push_back(i);
+  }
+  const int nf = static_cast<int>(face_idx.size());
   const int nh = script.hand ? hand_.num_markers() : 0;
   const int nj = hand_.num_joints();
   r.utterance = script.utterance;
@@ -334,13 +351,14 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
   r.forearm_pose = Eigen::MatrixXd::Zero(frames, script.hand ? 6 : 0);
   r.head_reference = HeadReference();
   for (int i = 0; i < nf; ++i) r.face_columns.push_back(i);
+  r.face_markers = face_idx;
   for (int i = 0; i < nh; ++i) r.hand_columns.push_back(nf + i);
 
   Take& take = r.take;
   take.name = name;
   take.rate_hz = rate;
   take.first_frame = 1;
-  take.marker_names = face_.marker_names();
+  for (int i : face_idx) take.marker_names.push_back(face_.marker_names()[static_cast<size_t>(i)]);
   if (script.hand) take.marker_names.insert(take.marker_names.end(), hand_.marker_names().begin(), hand_.marker_names().end());
   take.audio = script.utterance.audio;
   take.provenance.csw_version = CSW_VERSION;
@@ -428,7 +446,7 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
     r.head_motion.block<1, 3>(f, 3) = motion.translation.transpose();
     Eigen::Matrix3Xd face = face_.MarkersMoved(p, motion);
     for (int i = 0; i < nf; ++i) {
-      Eigen::Vector3d x = r.head_reference * Eigen::Vector3d(face.col(i));
+      Eigen::Vector3d x = r.head_reference * Eigen::Vector3d(face.col(face_idx[static_cast<size_t>(i)]));
       float* dst = r.clean.at(f, i);
       for (int c = 0; c < 3; ++c) dst[c] = static_cast<float>(x[c]);
     }

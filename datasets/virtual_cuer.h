@@ -50,6 +50,7 @@ struct SimulateOptions {
   PhasingModel phasing;
   bool overlap_gestures = true;
   int speech_rate_wpm = 80;   // espeak-ng speaking rate (cuers slow down: 300-400 ms keys)
+  int viseme_rate_wpm = 130;  // speaking rate of uncued speech (the viseme corpus)
   bool audio = true;          // synthesise audio (false: espeak-ng phone times only)
   double lead_in_s = 0.6;     // capture before the audio and after the last movement
   // Outputs of SimulateCorpus.
@@ -90,7 +91,8 @@ struct SimulationResult {
   Eigen::MatrixXd forearm_pose;   // frames × 6: rotation vector (rad), translation (mm) of the forearm frame in the lab
   Eigen::Isometry3d head_reference = Eigen::Isometry3d::Identity();  // reference head frame in the lab
   std::vector<int> hand_columns;  // take columns of the hand markers (empty when no hand)
-  std::vector<int> face_columns;  // take columns of the face markers
+  std::vector<int> face_columns;  // take columns of the face markers (first columns)
+  std::vector<int> face_markers;  // FaceModel index of each face column
   std::vector<LabelSwap> swaps;
   std::vector<std::string> warnings;
   int64_t frames() const { return take.frames(); }
@@ -108,8 +110,10 @@ class VirtualCuer {
   const SimulateOptions& options() const { return options_; }
 
   // The marker set describing every simulated marker (head cluster, face,
-  // throat with head weights, forearm cluster, hand segments, sticks).
-  MarkerSet MakeMarkerSet() const;
+  // throat with head weights, forearm cluster, hand segments, sticks), or the
+  // markers of one corpus: shapes = head cluster and hand, visemes = face only.
+  MarkerSet MakeMarkerSet() const { return MakeMarkerSet(CorpusKind::kSentences); }
+  MarkerSet MakeMarkerSet(CorpusKind kind) const;
   // All 113 marker names, face first then hand.
   std::vector<std::string> AllMarkerNames() const;
 
@@ -118,7 +122,9 @@ class VirtualCuer {
   SimulationResult SimulateSentence(const std::string& name, const std::string& text, bool cued = true) const;
   // A cued utterance from given phones (no espeak-ng needed; audio kept if present).
   SimulationResult SimulateUtterance(const std::string& name, const Utterance& utterance, bool cued = true) const;
-  // Hand shapes in free space: rest, then the shapes in order, then rest.
+  // Hand shapes in free space: rest, then the shapes in order, then rest. As in
+  // the seed's separate camera setting, only the hand and the rigid head
+  // markers are captured.
   SimulationResult SimulateShapes(const std::string& name, const std::vector<int>& shapes) const;
 
   // Gesture times of keys (capture clock), drawn as the options say.
