@@ -62,7 +62,7 @@ class FaceModel {
 
   // Half-axes of the ellipsoid approximating the head (for occlusions), centred at
   // head_centre(), and a neck cylinder from neck_top() to neck_bottom().
-  Eigen::Vector3d head_radii() const { return {78.0, 100.0, 120.0}; }
+  Eigen::Vector3d head_radii() const { return {70.0, 92.0, 115.0}; }
   Eigen::Vector3d head_centre() const { return {0.0, 8.0, 5.0}; }
   Eigen::Vector3d neck_top() const { return {0.0, 10.0, -80.0}; }
   Eigen::Vector3d neck_bottom() const { return {0.0, 0.0, -230.0}; }

@@ -221,7 +221,7 @@ TEST(VirtualCuer, KeysReachTheirPostureAndPlacementAtTheirTargetTimes) {
         const double t = std::max(g.timing.shape_target_s, g.timing.placement_target_s);
         const KeyTiming& next = r.keys[k + 1].timing;
         if (!overlap && std::min(next.shape_start_s, next.placement_start_s) < t) continue;
-        const int64_t f = FrameAt(r, t);
+        const int64_t f = FrameAt(r, t);  // both movements have reached their targets at t
         const HandPosture& posture = cuer.hand().config().Posture(g.key.shape);
         Eigen::VectorXd q = r.joint_angles.row(f).transpose();
         angle_err.push_back((q - posture.angles).cwiseAbs().maxCoeff());
@@ -241,13 +241,15 @@ TEST(VirtualCuer, KeysReachTheirPostureAndPlacementAtTheirTargetTimes) {
       EXPECT_LT(a_max, 0.5) << "degrees";
       EXPECT_LT(t_max, 1.0) << "mm";
     } else {
-      EXPECT_LT(a_med, 15.0) << "degrees";
-      EXPECT_LT(t_med, 15.0) << "mm";
+      // Blending with the neighbouring gestures: most keys still land close to their targets.
+      EXPECT_LT(a_med, 2.0) << "degrees";
+      EXPECT_LT(t_med, 3.0) << "mm";
     }
     const std::string tag = overlap ? "overlap_" : "no_overlap_";
     RecordProperty(tag + "keys_checked", std::to_string(checked) + "/" + std::to_string(keys_total));
     RecordProperty(tag + "posture_error_deg_median_max", std::to_string(a_med) + " " + std::to_string(a_max));
     RecordProperty(tag + "placement_error_mm_median_max", std::to_string(t_med) + " " + std::to_string(t_max));
+    RecordProperty(tag + "placement_error_mm_p90", std::to_string(tip_err[tip_err.size() * 9 / 10]));
   }
 }
 
