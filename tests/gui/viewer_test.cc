@@ -236,6 +236,21 @@ TEST_F(ViewerTest, PlaybackRunsAtTheCaptureRateAndStopsAtTheEnd) {
   EXPECT_EQ(w->marker_view()->frame(), kFrames - 1);
 }
 
+// Regression (found by the screenshot tour): switching takes used the previous
+// take's frame for the new take's cursor and paged the plots off the start.
+TEST_F(ViewerTest, SwitchingTakesRewindsAndShowsTheWholeNewTake) {
+  auto w = OpenWindow();
+  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+  w->playback()->Seek(45);
+  w->plots()->SetTimeRange(0.3, 0.5);
+  ASSERT_TRUE(w->SelectTake("beta"));
+  EXPECT_EQ(w->playback()->frame(), 0);
+  EXPECT_EQ(w->marker_view()->frame(), 0);
+  EXPECT_DOUBLE_EQ(w->plots()->cursor_time(), 0.0);
+  EXPECT_DOUBLE_EQ(w->plots()->view_start(), 0.0);
+  EXPECT_DOUBLE_EQ(w->plots()->view_end(), 0.5);  // 30 frames at 60 Hz
+}
+
 TEST_F(ViewerTest, ClickingAMarkerShowsItsNameAndCoordinates) {
   auto w = OpenWindow();
   ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));

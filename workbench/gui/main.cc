@@ -21,7 +21,8 @@ int main(int argc, char** argv) {
   QCommandLineOption tour(QStringLiteral("tour"), "Run the screenshot tour, writing PNGs into DIR, then exit.", "DIR");
   QCommandLineOption tour_work(QStringLiteral("tour-work"), "Scratch folder for the tour's demo corpus.", "DIR");
   QCommandLineOption tour_capture(QStringLiteral("tour-capture"), "A real capture the tour imports (repeatable).", "FILE");
-  parser.addOptions({tour, tour_work, tour_capture});
+  QCommandLineOption tour_markerset(QStringLiteral("tour-markerset"), "Marker set for the tour's captures.", "JSON");
+  parser.addOptions({tour, tour_work, tour_capture, tour_markerset});
   parser.process(app);
 
   if (parser.isSet(tour)) {
@@ -29,6 +30,7 @@ int main(int argc, char** argv) {
     options.out_dir = parser.value(tour);
     options.work_dir = parser.isSet(tour_work) ? parser.value(tour_work) : QDir::temp().filePath("csw-tour");
     options.captures = parser.values(tour_capture);
+    options.markerset = parser.value(tour_markerset);
     try {
       for (const QString& path : csw::gui::RunTour(options)) std::printf("%s\n", qPrintable(path));
     } catch (const std::exception& e) {

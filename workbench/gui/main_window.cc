@@ -91,8 +91,8 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   log_dock_->setWidget(log_);
   addDockWidget(Qt::BottomDockWidgetArea, log_dock_);
   splitDockWidget(plots_dock_, log_dock_, Qt::Vertical);
-  resizeDocks({plots_dock_, log_dock_}, {300, 90}, Qt::Vertical);
-  resizeDocks({takes_dock_}, {380}, Qt::Horizontal);
+  resizeDocks({plots_dock_, log_dock_}, {380, 90}, Qt::Vertical);
+  resizeDocks({takes_dock_}, {430}, Qt::Horizontal);
 
   playback_ = new Playback(this);
   import_runner_ = new ImportRunner(this);
@@ -304,6 +304,7 @@ bool MainWindow::SelectTake(const QString& name) {
     marker_view_->SetTake(take_, nullptr);
   }
   plots_->SetTake(take_);
+  playback_->SetTake(take_->frames(), take_->rate_hz, &take_->audio);  // rewinds to frame 0
   marker_combo_->clear();
   marker_combo_->addItem(tr("(none)"), -1);
   for (size_t k = 0; k < take_->marker_names.size(); ++k)
@@ -322,7 +323,6 @@ bool MainWindow::SelectTake(const QString& name) {
     marker_combo_->setCurrentIndex(first_visible + 1);
     OnMarkerSeriesChosen();
   }
-  playback_->SetTake(take_->frames(), take_->rate_hz, &take_->audio);
   if (browser_->current_take() != name) {
     browser_->blockSignals(true);
     browser_->SelectTake(name);

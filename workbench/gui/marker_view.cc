@@ -107,6 +107,8 @@ void MarkerView::SetTake(std::shared_ptr<const Take> take, const MarkerSet* mark
   clusters_.clear();
   cluster_names_.clear();
   in_marker_set_.clear();
+  head_columns_.clear();
+  face_columns_.clear();
   selected_ = -1;
   frame_ = 0;
   if (take_ && marker_set != nullptr) {
@@ -128,6 +130,10 @@ void MarkerView::SetTake(std::shared_ptr<const Take> take, const MarkerSet* mark
         cluster_names_.push_back(label);
       }
     };
+    for (const auto& n : marker_set->head_cluster)
+      if (auto it = binding.index.find(n); it != binding.index.end()) head_columns_.push_back(it->second);
+    for (const auto& n : marker_set->face)
+      if (auto it = binding.index.find(n); it != binding.index.end()) face_columns_.push_back(it->second);
     add_cluster(marker_set->head_cluster, tr("head"));
     add_cluster(marker_set->forearm_cluster, tr("forearm"));
   }
@@ -175,6 +181,30 @@ void MarkerView::ResetView() {
       fresh.target = Scale(Add(lo, hi), 0.5);
       double radius = std::max(10.0, 0.5 * Norm(Sub(hi, lo)));
       fresh.distance_mm = 1.15 * radius / std::sin(Rad(fresh.fov_deg) / 2);
+    }
+    // Face the talker: the horizontal direction from the head markers' centroid to the face's.
+    auto centroid = [&](int64_t f, const std::vector<int>& cols) -> std::optional<Vec> {
+      Vec sum{0, 0, 0};
+      int n = 0;
+      for (int c : cols) {
+        if (!m.Visible(f, c)) continue;
+        const float* p = m.at(f, c);
+        sum = Add(sum, Vec{p[0], p[1], p[2]});
+        ++n;
+      }
+      if (n == 0) return std::nullopt;
+      return Scale(sum, 1.0 / n);
+    };
+    if (!head_columns_.empty() && !face_columns_.empty()) {
+      for (int64_t f = 0; f < m.frames(); f += step) {
+        auto head = centroid(f, head_columns_), face = centroid(f, face_columns_);
+        if (!head || !face) continue;
+        Vec d = Sub(*face, *head);
+        double yaw = fresh.y_up ? std::atan2(-d[2], d[0]) : std::atan2(d[1], d[0]);
+        fresh.yaw_deg = yaw * 180.0 / std::numbers::pi + 30.0;
+        fresh.pitch_deg = 10.0;
+        break;
+      }
     }
   }
   camera_ = fresh;

@@ -61,7 +61,8 @@ class MarkerView : public QWidget {
   const Camera& camera() const { return camera_; }
   void SetPerspective(bool on);
   void SetYUp(bool on);
-  // Frames the whole take (all frames' visible markers).
+  // Frames the whole take (all frames' visible markers); with a marker set that
+  // names head and face markers, the camera looks at the face from 30° to its side.
   void ResetView();
   void Orbit(double dyaw_deg, double dpitch_deg);
   void Zoom(double factor);  // > 1 moves closer
@@ -103,6 +104,7 @@ class MarkerView : public QWidget {
   std::vector<std::pair<int, int>> sticks_;     // take columns
   std::vector<std::vector<int>> clusters_;      // take columns per rigid cluster
   std::vector<QString> cluster_names_;
+  std::vector<int> head_columns_, face_columns_;  // for facing the talker on ResetView
   std::vector<char> in_marker_set_;             // per column: bound by the marker set
   int selected_ = -1;
   QPointF press_pos_;

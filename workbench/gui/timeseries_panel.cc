@@ -99,12 +99,11 @@ class TierPlottable : public QCPAbstractPlottable {
                                   [](const Label& l, double v) { return l.start_s < v; });
     QFontMetrics metrics(painter->font());
     bool interval = tier_.kind == LabelTier::Kind::kInterval;
-    int drawn = 0;
+    double text_right = -1e300;
     for (auto it = first; it != tier_.labels.end() && it->start_s <= range.upper; ++it) {
       if (interval && it->end_s < range.lower) continue;
       double x0 = x->coordToPixel(it->start_s);
       double x1 = interval ? x->coordToPixel(it->end_s) : x0;
-      ++drawn;
       if (interval) {
         QRectF box(QPointF(x0, area.top() + 2), QPointF(x1, area.bottom() - 2));
         if (!it->text.empty()) {
@@ -124,9 +123,14 @@ class TierPlottable : public QCPAbstractPlottable {
       } else {
         painter->setPen(QPen(QColor(170, 60, 40), 1.5));
         painter->drawLine(QPointF(x0, area.top()), QPointF(x0, area.bottom()));
-        painter->setPen(QColor(20, 20, 20));
-        painter->drawText(QPointF(x0 + 3, area.center().y() + metrics.ascent() / 2.0),
-                          QString::fromStdString(it->text));
+        // A point's text only where it does not run into the previous one.
+        QString text = QString::fromStdString(it->text);
+        double width = metrics.horizontalAdvance(text);
+        if (x0 + 3 >= text_right) {
+          painter->setPen(QColor(20, 20, 20));
+          painter->drawText(QPointF(x0 + 3, area.center().y() + metrics.ascent() / 2.0), text);
+          text_right = x0 + 3 + width + 4;
+        }
       }
     }
     painter->setBrush(Qt::NoBrush);
@@ -189,11 +193,13 @@ TimeSeriesPanel::Lane& TimeSeriesPanel::AddLane(LaneKind kind, const QString& na
   lane->rect->setRangeZoom(Qt::Horizontal);
   lane->rect->setRangeZoomFactor(0.85);
   lane->rect->setMinimumMargins(QMargins(4, 2, 8, 2));
+  lane->rect->setMinimumSize(0, kind == LaneKind::kAudio || kind == LaneKind::kMarker ? 48 : 18);
   lane->rect->axis(QCPAxis::atBottom)->setTickLabels(false);
   QCPAxis* y = lane->rect->axis(QCPAxis::atLeft);
   QFont small = font();
   small.setPointSizeF(std::max(6.0, small.pointSizeF() * 0.85));
   y->setTickLabelFont(small);
+  y->ticker()->setTickCount(3);
   y->setLabelFont(small);
   connect(lane->rect->axis(QCPAxis::atBottom), qOverload<const QCPRange&>(&QCPAxis::rangeChanged), this,
           &TimeSeriesPanel::OnRangeChanged);
@@ -247,15 +253,18 @@ void TimeSeriesPanel::Rebuild() {
       for (int c = 0; c < a.channels; ++c) s += a.samples[static_cast<size_t>(i * a.channels + c)];
       mono[static_cast<size_t>(i)] = s / static_cast<float>(a.channels);
     }
-    Lane& lane = AddLane(LaneKind::kAudio, tr("audio"), 1.0);
+    Lane& lane = AddLane(LaneKind::kAudio, tr("audio"), 1.2);
     lane.series = MinMaxPyramid(std::move(mono), a.rate_hz);
     lane.graph = plot_->addGraph(lane.rect->axis(QCPAxis::atBottom), lane.rect->axis(QCPAxis::atLeft));
     lane.graph->setPen(QPen(QColor(40, 90, 160), 1));
     lane.graph->setAdaptiveSampling(false);
     lane.rect->axis(QCPAxis::atLeft)->setRange(-1.05, 1.05);
+    auto ticker = QSharedPointer<QCPAxisTickerFixed>::create();
+    ticker->setTickStep(1.0);
+    lane.rect->axis(QCPAxis::atLeft)->setTicker(ticker);
   }
   for (const LabelTier& t : take_->tiers) {
-    Lane& lane = AddLane(LaneKind::kTier, QString::fromStdString(t.name), 0.55);
+    Lane& lane = AddLane(LaneKind::kTier, QString::fromStdString(t.name), 0.5);
     lane.tier = new TierPlottable(lane.rect->axis(QCPAxis::atBottom), lane.rect->axis(QCPAxis::atLeft), t);
     QCPAxis* y = lane.rect->axis(QCPAxis::atLeft);
     y->setRange(0, 1);
@@ -280,7 +289,7 @@ void TimeSeriesPanel::Rebuild() {
   }
   if (marker_ >= 0) {
     QString name = QString::fromStdString(take_->marker_names[static_cast<size_t>(marker_)]);
-    Lane& lane = AddLane(LaneKind::kMarker, name + " " + QuantityName(quantity_), 1.0);
+    Lane& lane = AddLane(LaneKind::kMarker, name + " " + QuantityName(quantity_), 1.4);
     lane.unit = quantity_ == MarkerQuantity::kSpeed ? "mm/s" : "mm";
     lane.series = MinMaxPyramid(MarkerSeries(*take_, marker_, quantity_), take_->rate_hz);
     lane.graph = plot_->addGraph(lane.rect->axis(QCPAxis::atBottom), lane.rect->axis(QCPAxis::atLeft));

@@ -14,6 +14,7 @@
 #include "io/corpus/corpus.h"
 #include "workbench/gui/corpus_browser.h"
 #include "workbench/gui/demo_take.h"
+#include "workbench/gui/import_runner.h"
 #include "workbench/gui/log_panel.h"
 #include "workbench/gui/main_window.h"
 #include "workbench/gui/marker_view.h"
@@ -62,19 +63,23 @@ QStringList RunTour(const TourOptions& options) {
 
   QStringList written;
   MainWindow window(QDir(options.work_dir).filePath("tour-settings.ini"));
-  window.resize(1600, 1000);
+  window.resize(1600, 1100);
   window.show();
+  window.resizeDocks({window.plots_dock()}, {470}, Qt::Vertical);
   window.playback()->SetAudioEnabled(false);
   window.LoadMarkerSetFile(set_path);
   if (!window.OpenCorpus(corpus)) throw Error("tour: cannot open the demo corpus");
 
-  // 2. Real captures through the background import job.
+  // 2. Captures through the background import job (File > Import does the same).
+  QStringList imported;
   if (!options.captures.isEmpty()) {
     jobs::ImportOptions import;
     for (const QString& c : options.captures) import.files.push_back(c.toStdString());
     import.corpus = corpus.toStdString();
     QEventLoop loop;
     QObject::connect(&window, &MainWindow::ImportFinished, &loop, &QEventLoop::quit);
+    QObject::connect(window.import_runner(), &ImportRunner::Succeeded, &loop,
+                     [&imported](const QStringList& takes, const QStringList&) { imported = takes; });
     if (window.StartImport(import)) loop.exec();
   }
 
@@ -83,7 +88,8 @@ QStringList RunTour(const TourOptions& options) {
   std::shared_ptr<const Take> take = window.take();
   if (!take) throw Error("tour: the demo take did not load");
   int tip = static_cast<int>(take->MarkerIndex("index_tip"));
-  window.marker_view()->Orbit(-25, 5);
+  window.marker_view()->Zoom(1.3);
+  window.marker_view()->Pan(0, 50);
   window.playback()->Seek(static_cast<int64_t>(6.2 * take->rate_hz));
   window.marker_view()->SelectMarker(tip);
   window.marker_combo()->setCurrentIndex(tip + 1);
@@ -99,21 +105,26 @@ QStringList RunTour(const TourOptions& options) {
   written << Shot(window.plots_dock(), options.out_dir, "02-plots-zoomed.png");
 
   // 5. The 3D view alone, orbited, with a gap in the little finger.
-  window.marker_view()->Orbit(60, 10);
-  window.marker_view()->Zoom(1.6);
+  window.marker_view()->Orbit(-60, 10);
+  window.marker_view()->Zoom(1.25);
+  window.marker_view()->Pan(0, 110);
   written << Shot(window.marker_view(), options.out_dir, "03-3d-view.png");
 
-  // 6. A real capture, when one was imported.
-  for (const QString& c : options.captures) {
-    QString name = QFileInfo(c).completeBaseName();
-    if (!window.browser()->SelectTake(name)) continue;
-    window.marker_view()->SetYUp(true);  // NaturalPoint / Motive captures are Y-up
+  // 6. The imported captures: the demo corpus's first take, then a real face capture.
+  if (!options.markerset.isEmpty()) window.LoadMarkerSetFile(options.markerset);
+  int shot = 4;
+  for (const QString& name : {imported.value(0), QStringLiteral("Facial-Sing")}) {
+    if (name.isEmpty() || !imported.contains(name) || !window.browser()->SelectTake(name)) continue;
+    bool y_up = name == "Facial-Sing";  // NaturalPoint Motive exports are Y-up
+    window.marker_view()->SetYUp(y_up);
     window.marker_view()->ResetView();
-    window.marker_view()->Orbit(90, 0);
+    window.marker_view()->Orbit(y_up ? 90 : -70, 0);
+    window.marker_view()->Zoom(1.8);
     window.playback()->Seek(window.playback()->frames() / 3);
-    written << Shot(&window, options.out_dir, "04-real-capture.png");
+    written << Shot(&window, options.out_dir,
+                    QStringLiteral("%1-%2.png").arg(shot++, 2, 10, QChar('0')).arg(y_up ? "real-face-capture" : "imported-take"));
     window.marker_view()->SetYUp(false);
-    break;
+    if (y_up) break;
   }
 
   // 7. A damaged file: the error lands in the log and the window stays usable.
@@ -125,7 +136,7 @@ QStringList RunTour(const TourOptions& options) {
   }
   window.OpenCorpus(damaged);
   window.browser()->SelectTake(QString::fromStdString(demo.name));
-  written << Shot(&window, options.out_dir, "05-damaged-file.png");
+  written << Shot(&window, options.out_dir, QStringLiteral("%1-damaged-file.png").arg(shot, 2, 10, QChar('0')));
   window.close();
   return written;
 }
