@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
   });
   try {
     if (kind == "demo") {
-      csw::GenerateDemoCorpus(out, o.seed, o.count > 0 ? o.count : 8, progress);
+      csw::GenerateDemoCorpus(out, o.seed, o.count > 0 ? o.count : 7, progress);
       return 0;
     }
     if (!csw::ParseCorpusKind(kind, &o.kind)) return usage();

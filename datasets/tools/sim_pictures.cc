@@ -99,7 +99,7 @@ int main(int argc, char** argv) {
     csw::FrameRenderOptions ro;
     ro.centre = Eigen::Vector3d(-40.0, 0.0, 1180.0);
     ro.mm_per_pixel = 1.0;
-    ro.title = "captured frame " + std::to_string(mid) + " (occluded markers missing)";
+    ro.title = "frame " + std::to_string(mid) + " as captured";
     csw::RenderFramePng((out / "sim_frame.png").string(), frame, r.take.marker_names, sticks, ro);
     fs::remove_all(tmp);
     std::printf("%s: %s\n", "sentence", sentences.at(0).c_str());
