@@ -425,6 +425,40 @@ TEST(VirtualCuer, FilesReadBackWithTheValuesWritten) {
   EXPECT_NE(truth.find("\"joint_angles\""), std::string::npos);
 }
 
+// The TextGrids open in Praat itself: Debian's praat reads each one and lists its
+// tiers with their sizes, which match csw's own reader.
+TEST(VirtualCuer, TextGridsOpenInPraat) {
+  if (std::system("praat --version > /dev/null 2>&1") != 0) GTEST_SKIP() << "praat is not installed";
+  testing::TempDir dir;
+  const fs::path script = dir / "tiers.praat";
+  {
+    std::ofstream out(script);
+    out << "form Read\n  sentence path x\nendform\n"
+           "Read from file: path$\nn = Get number of tiers\n"
+           "for i to n\n  name$ = Get tier name: i\n"
+           "  if do (\"Is interval tier...\", i)\n    k = Get number of intervals: i\n"
+           "  else\n    k = Get number of points: i\n  endif\n"
+           "  appendInfoLine: name$, \" \", k\nendfor\n";
+  }
+  SimulateOptions o;
+  WriteTakeFiles(DefaultSentence(), o, dir.path().string());
+  WriteTakeFiles(ShapesTake(), o, dir.path().string());
+  for (const char* take : {"sentence_test", "shapes_test"}) {
+    const fs::path tg = dir / (std::string(take) + ".TextGrid");
+    const fs::path out = dir / (std::string(take) + ".txt");
+    const std::string cmd = "praat --run \"" + script.string() + "\" \"" + tg.string() + "\" > \"" + out.string() + "\" 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadBytes(out);
+    std::string expected;
+    for (const LabelTier& t : ReadTextGrid(tg.string()))
+      expected += t.name + " " + std::to_string(t.labels.size()) + "\n";
+    std::string got;
+    std::istringstream lines(ReadBytes(out));
+    for (std::string line; std::getline(lines, line);)
+      if (!line.empty()) got += line + "\n";
+    EXPECT_EQ(got, expected) << take;
+  }
+}
+
 // Determinism: the same command and seed, run twice in fresh processes, writes
 // byte-identical files; another seed writes different ones. (espeak-ng carries
 // state from one utterance to the next inside a process, so a corpus is
