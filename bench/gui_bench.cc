@@ -5,7 +5,8 @@
 //  - PlaybackFrame: one playback frame of a 10-minute take (113 markers at
 //    120 Hz) with three plot lanes (audio, one tier, one marker's speed) over a
 //    10 s window: frame advance, 3D repaint, cursor repaint (and a full replot
-//    each time the cursor pages). items_per_second is the sustainable frame rate.
+//    each time the cursor pages). items_per_second is the sustainable frame rate;
+//  - LoadFirstTakeOnly: the corpus-store share of the first measurement.
 // Links csw_gui (workbench/gui/CMakeLists.txt adds it to this target).
 #include <benchmark/benchmark.h>
 
@@ -85,6 +86,17 @@ void BM_OpenCorpusShowFirstTake(benchmark::State& state) {
   state.counters["frames"] = static_cast<double>(window.take()->frames());
 }
 BENCHMARK(BM_OpenCorpusShowFirstTake)->Arg(60)->Arg(600)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The storage share of the above: Corpus::Open + LoadTake of the same first take, no widgets.
+void BM_LoadFirstTakeOnly(benchmark::State& state) {
+  std::string corpus = MakeCorpus(static_cast<double>(state.range(0)), false);
+  for (auto _ : state) {
+    csw::Corpus c = csw::Corpus::Open(corpus);
+    csw::Take t = c.LoadTake(c.Takes().front().name);
+    benchmark::DoNotOptimize(t.markers.data().data());
+  }
+}
+BENCHMARK(BM_LoadFirstTakeOnly)->Arg(60)->Arg(600)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_PlaybackFrame(benchmark::State& state) {
   std::string corpus = MakeCorpus(600.0, true);

@@ -166,6 +166,18 @@ TimeSeriesPanel::~TimeSeriesPanel() = default;
 
 void TimeSeriesPanel::SetTake(std::shared_ptr<const Take> take) {
   take_ = std::move(take);
+  audio_.reset();
+  if (take_ && !take_->audio.samples.empty() && take_->audio.channels > 0) {
+    // Built once per take (a 10-minute take at 16 kHz has ~10 M samples), shared by rebuilds.
+    const Audio& a = take_->audio;
+    std::vector<float> mono(static_cast<size_t>(a.frames()));
+    for (int64_t i = 0; i < a.frames(); ++i) {
+      float s = 0;
+      for (int c = 0; c < a.channels; ++c) s += a.samples[static_cast<size_t>(i * a.channels + c)];
+      mono[static_cast<size_t>(i)] = s / static_cast<float>(a.channels);
+    }
+    audio_ = std::make_shared<const MinMaxPyramid>(std::move(mono), a.rate_hz);
+  }
   marker_ = -1;
   cursor_t_ = 0.0;
   Rebuild();
@@ -245,16 +257,9 @@ void TimeSeriesPanel::Rebuild() {
   duration_s_ = std::max(take_->duration_s(), take_->audio.duration_s());
   for (const LabelTier& t : take_->tiers) duration_s_ = std::max(duration_s_, t.end_s);
 
-  if (!take_->audio.samples.empty()) {
-    const Audio& a = take_->audio;
-    std::vector<float> mono(static_cast<size_t>(a.frames()));
-    for (int64_t i = 0; i < a.frames(); ++i) {
-      float s = 0;
-      for (int c = 0; c < a.channels; ++c) s += a.samples[static_cast<size_t>(i * a.channels + c)];
-      mono[static_cast<size_t>(i)] = s / static_cast<float>(a.channels);
-    }
+  if (audio_) {
     Lane& lane = AddLane(LaneKind::kAudio, tr("audio"), 1.2);
-    lane.series = MinMaxPyramid(std::move(mono), a.rate_hz);
+    lane.series = audio_;
     lane.graph = plot_->addGraph(lane.rect->axis(QCPAxis::atBottom), lane.rect->axis(QCPAxis::atLeft));
     lane.graph->setPen(QPen(QColor(40, 90, 160), 1));
     lane.graph->setAdaptiveSampling(false);
@@ -291,12 +296,12 @@ void TimeSeriesPanel::Rebuild() {
     QString name = QString::fromStdString(take_->marker_names[static_cast<size_t>(marker_)]);
     Lane& lane = AddLane(LaneKind::kMarker, name + " " + QuantityName(quantity_), 1.4);
     lane.unit = quantity_ == MarkerQuantity::kSpeed ? "mm/s" : "mm";
-    lane.series = MinMaxPyramid(MarkerSeries(*take_, marker_, quantity_), take_->rate_hz);
+    lane.series = std::make_shared<const MinMaxPyramid>(MarkerSeries(*take_, marker_, quantity_), take_->rate_hz);
     lane.graph = plot_->addGraph(lane.rect->axis(QCPAxis::atBottom), lane.rect->axis(QCPAxis::atLeft));
     lane.graph->setPen(QPen(QColor(30, 130, 60), 1.3));
     lane.graph->setAdaptiveSampling(false);
     float lo = kNaN, hi = kNaN;
-    for (float v : lane.series.samples()) {
+    for (float v : lane.series->samples()) {
       if (std::isnan(v)) continue;
       lo = std::isnan(lo) ? v : std::min(lo, v);
       hi = std::isnan(hi) ? v : std::max(hi, v);
@@ -369,7 +374,7 @@ void TimeSeriesPanel::Redecimate() {
     if (lane->graph == nullptr) continue;
     QCPRange r = lane->rect->axis(QCPAxis::atBottom)->range();
     int columns = std::max(100, lane->rect->width() > 0 ? lane->rect->width() : plot_->width());
-    std::vector<MinMaxBin> bins = lane->series.Decimate(r.lower, r.upper, columns);
+    std::vector<MinMaxBin> bins = lane->series->Decimate(r.lower, r.upper, columns);
     QVector<QCPGraphData> data;
     data.reserve(static_cast<int>(bins.size() * 2));
     for (const MinMaxBin& b : bins) {
@@ -384,7 +389,7 @@ QString TimeSeriesPanel::ReadoutText(const Lane& lane) const {
   switch (lane.kind) {
     case LaneKind::kAudio:
     case LaneKind::kMarker: {
-      float v = lane.series.ValueAt(cursor_t_);
+      float v = lane.series->ValueAt(cursor_t_);
       QString value = std::isnan(v) ? tr("missing") : QString::number(v, 'f', lane.kind == LaneKind::kAudio ? 3 : 2);
       return QStringLiteral("%1: %2 %3").arg(lane.name, value, std::isnan(v) ? QString() : lane.unit).trimmed();
     }

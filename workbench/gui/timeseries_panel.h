@@ -83,7 +83,7 @@ class TimeSeriesPanel : public QWidget {
     QCPAxisRect* rect = nullptr;
     QCPGraph* graph = nullptr;        // audio and marker lanes
     TierPlottable* tier = nullptr;    // tier and event lanes
-    MinMaxPyramid series;             // audio and marker lanes
+    std::shared_ptr<const MinMaxPyramid> series;  // audio and marker lanes
     QCPItemStraightLine* cursor = nullptr;
     QCPItemText* readout = nullptr;
   };
@@ -98,6 +98,7 @@ class TimeSeriesPanel : public QWidget {
   QCustomPlot* plot_ = nullptr;
   QCPMarginGroup* margins_ = nullptr;
   std::shared_ptr<const Take> take_;
+  std::shared_ptr<const MinMaxPyramid> audio_;  // the take's audio (channels averaged)
   std::vector<std::unique_ptr<Lane>> lanes_;
   int marker_ = -1;
   MarkerQuantity quantity_ = MarkerQuantity::kZ;
