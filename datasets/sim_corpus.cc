@@ -143,6 +143,13 @@ std::string TruthToJson(const SimulationResult& r) {
                     {"placement_target_s", g.timing.placement_target_s},
                     {"shape_start_s", g.timing.shape_start_s},
                     {"shape_target_s", g.timing.shape_target_s}});
+    if (g.posture.size() > 0) {
+      json q = json::array();
+      for (Eigen::Index j = 0; j < g.posture.size(); ++j) q.push_back(Round(g.posture[j], 1e-5));
+      keys.back()["posture"] = q;
+      keys.back()["placement_point"] = {Round(g.placement_point.x(), 1e-3), Round(g.placement_point.y(), 1e-3),
+                                        Round(g.placement_point.z(), 1e-3)};
+    }
   }
   j["keys"] = keys;
   json phones = json::array();

@@ -102,6 +102,9 @@ std::string SimulateOptions::Check() const {
   if (speech_rate_wpm < 80 || speech_rate_wpm > 450) return "speech_rate_wpm must be in [80, 450]";
   if (viseme_rate_wpm < 80 || viseme_rate_wpm > 450) return "viseme_rate_wpm must be in [80, 450]";
   if (!(lead_in_s >= 0.3 && lead_in_s <= 10.0)) return "lead_in_s must be in [0.3, 10] s";
+  if (!(posture_sd_deg >= 0.0 && posture_sd_deg <= 20.0)) return "posture_sd_deg must be in [0, 20]";
+  if (!(placement_sd_mm >= 0.0 && placement_sd_mm <= 30.0)) return "placement_sd_mm must be in [0, 30]";
+  if (!(orientation_sd_deg >= 0.0 && orientation_sd_deg <= 20.0)) return "orientation_sd_deg must be in [0, 20]";
   if (std::string why = phasing.Check(); !why.empty()) return "phasing: " + why;
   for (const auto& s : sentences)
     if (s.find_first_not_of(" \t\r\n") == std::string::npos) return "a sentence is empty";
@@ -343,7 +346,7 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
   const int nh = script.hand ? hand_.num_markers() : 0;
   const int nj = hand_.num_joints();
   r.utterance = script.utterance;
-  for (size_t i = 0; i < script.keys.size(); ++i) r.keys.push_back({script.keys[i], script.timing[i]});
+  for (size_t i = 0; i < script.keys.size(); ++i) r.keys.push_back({script.keys[i], script.timing[i], Eigen::VectorXd(), Eigen::Vector3d::Zero()});
   for (const auto& j : hand_.config().joints) r.joint_names.push_back(j.name);
   r.joint_angles = Eigen::MatrixXd::Zero(frames, script.hand ? nj : 0);
   r.articulation = Eigen::MatrixXd::Zero(frames, kNumArticulatory);
@@ -380,23 +383,34 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
   std::vector<Gesture> shape_g, place_g;
   Eigen::VectorXd shape0, place0;
   if (script.hand && nk > 0) {
-    auto shape_vec = [&](const Key& k) {
-      const HandPosture& p = hand_.config().Posture(k.shape);
-      Eigen::VectorXd v(nj + 1);
-      v.head(nj) = p.angles;
-      v[nj] = p.reference_finger == "index" ? 1.0 : 0.0;
-      return v;
+    // Each key's actual targets: the configured posture and placement with a
+    // little per-key variability (a cuer never makes the same key twice).
+    std::mt19937_64 var_rng = Stream(options_.seed, name, 4);
+    auto normal = [&](double sd) {
+      return sd * std::clamp(StandardNormal(var_rng), -2.5, 2.5);
     };
-    auto place_vec = [&](size_t i) {
-      return PlacementVector(placements_.At(script.pose_placement[i]), face_);
-    };
-    shape0 = shape_vec(script.keys[0]);
-    place0 = place_vec(0);
+    std::vector<Eigen::VectorXd> shape_t(nk), place_t(nk);
+    for (size_t i = 0; i < nk; ++i) {
+      const HandPosture& p = hand_.config().Posture(script.keys[i].shape);
+      Eigen::VectorXd q = p.angles;
+      for (int j = 0; j < nj; ++j) q[j] += normal(options_.posture_sd_deg * kDeg);
+      q = hand_.config().Clamp(q);
+      shape_t[i].resize(nj + 1);
+      shape_t[i].head(nj) = q;
+      shape_t[i][nj] = p.reference_finger == "index" ? 1.0 : 0.0;
+      Eigen::VectorXd z = PlacementVector(placements_.At(script.pose_placement[i]), face_);
+      for (int c = 0; c < 3; ++c) z[c] += normal(options_.placement_sd_mm);
+      for (int c = 3; c < 6; ++c) z[c] += normal(options_.orientation_sd_deg * kDeg);
+      place_t[i] = z;
+      r.keys[i].posture = q;
+      r.keys[i].placement_point = z.head<3>();
+    }
+    shape0 = shape_t[0];
+    place0 = place_t[0];
     for (size_t i = 1; i < nk; ++i) {
-      shape_g.push_back({script.timing[i].shape_start_s, script.timing[i].shape_target_s,
-                         shape_vec(script.keys[i]) - shape_vec(script.keys[i - 1])});
-      place_g.push_back({script.timing[i].placement_start_s, script.timing[i].placement_target_s,
-                         place_vec(i) - place_vec(i - 1)});
+      shape_g.push_back({script.timing[i].shape_start_s, script.timing[i].shape_target_s, shape_t[i] - shape_t[i - 1]});
+      place_g.push_back(
+          {script.timing[i].placement_start_s, script.timing[i].placement_target_s, place_t[i] - place_t[i - 1]});
     }
   }
 

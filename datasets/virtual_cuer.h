@@ -49,6 +49,11 @@ struct SimulateOptions {
   // movement starts after the previous target, no blending).
   PhasingModel phasing;
   bool overlap_gestures = true;
+  // Per-key variability of the targets (truncated at 2.5 sd): joint angles,
+  // fingertip point and forearm orientation.
+  double posture_sd_deg = 3.0;
+  double placement_sd_mm = 3.0;
+  double orientation_sd_deg = 2.0;
   int speech_rate_wpm = 80;   // espeak-ng speaking rate (cuers slow down: 300-400 ms keys)
   int viseme_rate_wpm = 130;  // speaking rate of uncued speech (the viseme corpus)
   bool audio = true;          // synthesise audio (false: espeak-ng phone times only)
@@ -68,6 +73,8 @@ struct SimulateOptions {
 struct GestureTruth {
   Key key;                 // times shifted to the capture clock
   KeyTiming timing;        // movement start/target times on the capture clock
+  Eigen::VectorXd posture;                 // the key's actual joint-angle target (rad)
+  Eigen::Vector3d placement_point = Eigen::Vector3d::Zero();  // actual fingertip target, head frame
 };
 
 // Frame state codes of the occlusion mask.
