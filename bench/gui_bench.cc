@@ -119,8 +119,10 @@ void BM_PlaybackFrame(benchmark::State& state) {
     plots->plot()->repaint();
   }
   state.SetItemsProcessed(state.iterations());
-  state.counters["view_paints_per_frame"] = static_cast<double>(view_paints.paints) / static_cast<double>(state.iterations());
-  state.counters["plot_paints_per_frame"] = static_cast<double>(plot_paints.paints) / static_cast<double>(state.iterations());
+  state.counters["view_paints_per_frame"] =
+      static_cast<double>(view_paints.paints) / static_cast<double>(state.iterations());
+  state.counters["plot_paints_per_frame"] =
+      static_cast<double>(plot_paints.paints) / static_cast<double>(state.iterations());
   state.counters["lanes"] = plots->lane_count();
   state.counters["markers"] = static_cast<double>(window.take()->markers.markers());
 }

@@ -1,11 +1,11 @@
 // Display decimation: every bin's extremes equal a brute-force scan of its samples.
+#include "workbench/gui/minmax.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 #include <random>
-
-#include "workbench/gui/minmax.h"
 
 namespace csw::gui {
 namespace {

@@ -3,6 +3,7 @@
 // plot zoom, figure export, background import with Cancel, damaged files and
 // the remembered layout. Every check compares with the values written.
 #include <gtest/gtest.h>
+#include <qcustomplot.h>
 
 #include <QApplication>
 #include <QDockWidget>
@@ -17,8 +18,6 @@
 #include <filesystem>
 #include <fstream>
 #include <semaphore>
-
-#include <qcustomplot.h>
 
 #include "core/markerset.h"
 #include "io/c3d/c3d.h"
@@ -43,12 +42,17 @@ constexpr int kFrames = 50;
 // m1 circles; m2 is missing in frames 10-14 and 30-31 (two gaps).
 std::array<float, 3> Expected(int marker, int frame) {
   switch (marker) {
-    case 0: return {10.0f + frame, 20.0f + 2.0f * frame, 30.0f + 2.0f * frame};
-    case 1: return {static_cast<float>(100 * std::cos(frame * 0.1)), static_cast<float>(100 * std::sin(frame * 0.1)), 50.0f};
-    default: return {-40.0f, 5.0f * frame, 80.0f};
+    case 0:
+      return {10.0f + frame, 20.0f + 2.0f * frame, 30.0f + 2.0f * frame};
+    case 1:
+      return {static_cast<float>(100 * std::cos(frame * 0.1)), static_cast<float>(100 * std::sin(frame * 0.1)), 50.0f};
+    default:
+      return {-40.0f, 5.0f * frame, 80.0f};
   }
 }
-bool Missing(int marker, int frame) { return marker == 2 && ((frame >= 10 && frame <= 14) || frame == 30 || frame == 31); }
+bool Missing(int marker, int frame) {
+  return marker == 2 && ((frame >= 10 && frame <= 14) || frame == 30 || frame == 31);
+}
 
 Take MakeAlpha() {
   Take t;
@@ -63,12 +67,14 @@ Take MakeAlpha() {
       std::copy(p.begin(), p.end(), t.markers.at(f, k));
     }
   }
-  LabelTier words{"words", LabelTier::Kind::kInterval, 0.0, 0.5, {{0.0, 0.1, ""}, {0.1, 0.3, "hello"}, {0.3, 0.5, "world"}}};
+  LabelTier words{
+      "words", LabelTier::Kind::kInterval, 0.0, 0.5, {{0.0, 0.1, ""}, {0.1, 0.3, "hello"}, {0.3, 0.5, "world"}}};
   LabelTier cues{"cues", LabelTier::Kind::kPoint, 0.0, 0.5, {{0.05, 0.05, "side"}, {0.25, 0.25, "chin"}}};
   t.tiers = {words, cues};
   t.audio.rate_hz = 8000;
   t.audio.channels = 1;
-  for (int i = 0; i < 4000; ++i) t.audio.samples.push_back(static_cast<float>(0.5 * std::sin(2 * M_PI * 200 * i / 8000.0)));
+  for (int i = 0; i < 4000; ++i)
+    t.audio.samples.push_back(static_cast<float>(0.5 * std::sin(2 * M_PI * 200 * i / 8000.0)));
   return t;
 }
 
@@ -209,7 +215,8 @@ TEST_F(ViewerTest, KeyboardStepsKeepViewAndPlotsOnTheSameFrame) {
   QCustomPlot* plot = plots->plot();
   QCPAxis* x = plot->axisRects().back()->axis(QCPAxis::atBottom);
   double y = plot->axisRects().back()->rect().center().y();
-  QTest::mouseClick(plot, Qt::LeftButton, {}, QPoint(static_cast<int>(std::lround(x->coordToPixel(0.205))), static_cast<int>(y)));
+  QTest::mouseClick(plot, Qt::LeftButton, {},
+                    QPoint(static_cast<int>(std::lround(x->coordToPixel(0.205))), static_cast<int>(y)));
   int f = w->playback()->frame();
   EXPECT_NEAR(f, 20, 1);
   check_frame(f);
@@ -261,7 +268,8 @@ TEST_F(ViewerTest, ClickingAMarkerShowsItsNameAndCoordinates) {
   QTest::mouseClick(view, Qt::LeftButton, {}, pos->toPoint());
   EXPECT_EQ(view->selected_marker(), 1);
   auto e = Expected(1, 7);
-  EXPECT_EQ(view->SelectionText(), QString("m1: %1, %2, %3 mm").arg(e[0], 0, 'f', 2).arg(e[1], 0, 'f', 2).arg(e[2], 0, 'f', 2));
+  EXPECT_EQ(view->SelectionText(),
+            QString("m1: %1, %2, %3 mm").arg(e[0], 0, 'f', 2).arg(e[1], 0, 'f', 2).arg(e[2], 0, 'f', 2));
   EXPECT_EQ(w->plots()->marker(), 1);  // the plots follow the pick
   EXPECT_TRUE(w->log()->entries().back().startsWith("m1: "));
   // A missing marker says so instead of showing stale coordinates.
@@ -341,8 +349,8 @@ TEST_F(ViewerTest, ZoomIsSharedByAllLanes) {
   // The mouse wheel over one lane zooms every lane together.
   QCustomPlot* plot = plots->plot();
   QPoint at = plot->axisRects().front()->rect().center();
-  QWheelEvent wheel(QPointF(at), plot->mapToGlobal(QPointF(at)), QPoint(), QPoint(0, 120), Qt::NoButton,
-                    Qt::NoModifier, Qt::NoScrollPhase, false);
+  QWheelEvent wheel(QPointF(at), plot->mapToGlobal(QPointF(at)), QPoint(), QPoint(0, 120), Qt::NoButton, Qt::NoModifier,
+                    Qt::NoScrollPhase, false);
   QApplication::sendEvent(plot, &wheel);
   double width = plots->view_end() - plots->view_start();
   EXPECT_LT(width, 0.25 - 1e-6);

@@ -15,8 +15,8 @@ QString FormatDuration(double seconds) {
 CorpusBrowser::CorpusBrowser(QWidget* parent) : QTreeWidget(parent) {
   setObjectName("corpusBrowser");
   setColumnCount(kColumnCount);
-  setHeaderLabels({tr("Take"), tr("Duration"), tr("Rate (Hz)"), tr("Frames"), tr("Markers"), tr("Gaps"),
-                   tr("Tiers"), tr("Audio")});
+  setHeaderLabels(
+      {tr("Take"), tr("Duration"), tr("Rate (Hz)"), tr("Frames"), tr("Markers"), tr("Gaps"), tr("Tiers"), tr("Audio")});
   setRootIsDecorated(false);
   setUniformRowHeights(true);
   setAlternatingRowColors(true);
@@ -43,7 +43,8 @@ void CorpusBrowser::SetTakes(const std::vector<TakeSummary>& takes) {
     item->setText(kGaps, QString::number(t.gaps));
     item->setText(kTiers, tiers.isEmpty() ? QStringLiteral("—") : tiers.join(", "));
     item->setText(kAudio, t.has_audio ? tr("yes") : tr("no"));
-    for (int c : {kDuration, kRate, kFrames, kMarkers, kGaps}) item->setTextAlignment(c, Qt::AlignRight | Qt::AlignVCenter);
+    for (int c : {kDuration, kRate, kFrames, kMarkers, kGaps})
+      item->setTextAlignment(c, Qt::AlignRight | Qt::AlignVCenter);
     item->setToolTip(kName, tr("%1 analog channel(s)").arg(t.analog_channels));
   }
   blockSignals(false);

@@ -93,7 +93,8 @@ MarkerSet DemoMarkerSet(int markers) {
   int cols = std::max(1, static_cast<int>(std::lround(std::sqrt(face * 1.4))));
   for (int i = 0; i < face; ++i) {
     set.face.push_back("face_" + std::to_string(i + 1));
-    if ((i + 1) % cols != 0 && i + 1 < face) set.sticks.push_back({set.face[static_cast<size_t>(i)], "face_" + std::to_string(i + 2)});
+    if ((i + 1) % cols != 0 && i + 1 < face)
+      set.sticks.push_back({set.face[static_cast<size_t>(i)], "face_" + std::to_string(i + 2)});
   }
   return set;
 }
@@ -155,7 +156,9 @@ Take MakeDemoTake(const DemoTakeOptions& o) {
       const Vec& to = kTargets[syl[s].position];
       const Vec& from = s > 0 ? kTargets[syl[s - 1].position] : kTargets[0];
       double a = Smooth((t - (syl[s].start - 0.18)) / 0.16);
-      for (int i = 0; i < 3; ++i) hand_target[static_cast<size_t>(i)] = from[static_cast<size_t>(i)] + a * (to[static_cast<size_t>(i)] - from[static_cast<size_t>(i)]);
+      for (int i = 0; i < 3; ++i)
+        hand_target[static_cast<size_t>(i)] =
+            from[static_cast<size_t>(i)] + a * (to[static_cast<size_t>(i)] - from[static_cast<size_t>(i)]);
     }
     double yaw = 0.09 * std::sin(2 * kPi * 0.21 * t), pitch = 0.05 * std::sin(2 * kPi * 0.33 * t + 1) + 0.08 * open;
     Vec head{0.0 + 6 * std::sin(2 * kPi * 0.13 * t), 0.0, 1600 + 4 * std::sin(2 * kPi * 0.4 * t)};
@@ -187,8 +190,8 @@ Take MakeDemoTake(const DemoTakeOptions& o) {
         Vec p{base[0] + bend, base[1] + (fi == 0 ? along * 0.7 : 0), base[2] + (fi == 0 ? along * 0.4 : along) - bend};
         put(k, p);
         // Occlusions: the little finger's tip hides behind the hand now and then.
-        bool hidden = (fi == 4 && j == 2 && std::sin(2 * kPi * 0.37 * t) > 0.8) ||
-                      (fi == 3 && j == 1 && std::fmod(t, 4.0) > 3.6);
+        bool hidden =
+            (fi == 4 && j == 2 && std::sin(2 * kPi * 0.37 * t) > 0.8) || (fi == 3 && j == 1 && std::fmod(t, 4.0) > 3.6);
         if (hidden) take.markers.SetMissing(f, k);
         ++k;
       }

@@ -31,7 +31,8 @@ bool ImportRunner::Start(const jobs::ImportOptions& options) {
     if (now - *last < std::chrono::milliseconds(33) && fraction < 1.0) return;
     *last = now;
     QString s = QString::fromStdString(stage);
-    QMetaObject::invokeMethod(this, [this, s, fraction] { emit ProgressChanged(s, fraction); }, Qt::QueuedConnection);
+    QMetaObject::invokeMethod(
+        this, [this, s, fraction] { emit ProgressChanged(s, fraction); }, Qt::QueuedConnection);
   });
   thread_ = QThread::create([this] {
     try {

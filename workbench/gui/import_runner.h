@@ -30,9 +30,7 @@ class ImportRunner : public QObject {
 
   // Called on the worker thread at every progress update, before the GUI hears
   // of it (tests use it to cancel at a known point; must be set before Start).
-  void SetWorkerHook(std::function<void(const std::string& stage, double fraction)> hook) {
-    hook_ = std::move(hook);
-  }
+  void SetWorkerHook(std::function<void(const std::string& stage, double fraction)> hook) { hook_ = std::move(hook); }
 
  signals:
   void ProgressChanged(const QString& stage, double fraction);

@@ -13,9 +13,9 @@ LogPanel::LogPanel(QWidget* parent) : QPlainTextEdit(parent) {
 }
 
 void LogPanel::Add(Level level, const QString& message) {
-  QString prefix = level == Level::kError ? QStringLiteral("error: ")
+  QString prefix = level == Level::kError     ? QStringLiteral("error: ")
                    : level == Level::kWarning ? QStringLiteral("warning: ")
-                                               : QString();
+                                              : QString();
   entries_.push_back(prefix + message);
   levels_.push_back(level);
   QString color = level == Level::kError ? "#c0392b" : level == Level::kWarning ? "#b9770e" : "#303030";

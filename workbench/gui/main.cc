@@ -20,7 +20,8 @@ int main(int argc, char** argv) {
   parser.addPositionalArgument("corpus", "Corpus (.h5) to open.", "[CORPUS.h5]");
   QCommandLineOption tour(QStringLiteral("tour"), "Run the screenshot tour, writing PNGs into DIR, then exit.", "DIR");
   QCommandLineOption tour_work(QStringLiteral("tour-work"), "Scratch folder for the tour's demo corpus.", "DIR");
-  QCommandLineOption tour_capture(QStringLiteral("tour-capture"), "A real capture the tour imports (repeatable).", "FILE");
+  QCommandLineOption tour_capture(QStringLiteral("tour-capture"), "A real capture the tour imports (repeatable).",
+                                  "FILE");
   QCommandLineOption tour_markerset(QStringLiteral("tour-markerset"), "Marker set for the tour's captures.", "JSON");
   parser.addOptions({tour, tour_work, tour_capture, tour_markerset});
   parser.process(app);

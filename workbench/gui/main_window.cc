@@ -132,8 +132,8 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
           });
   connect(import_runner_, &ImportRunner::Canceled, this, [this, finish] {
     finish();
-    log_->Info(tr("Import cancelled: %1 was left unchanged.")
-                   .arg(QString::fromStdString(import_runner_->options().corpus)));
+    log_->Info(
+        tr("Import cancelled: %1 was left unchanged.").arg(QString::fromStdString(import_runner_->options().corpus)));
     emit ImportFinished();
   });
   connect(import_runner_, &ImportRunner::Failed, this, [this, finish](const QString& message) {
@@ -197,8 +197,7 @@ void MainWindow::BuildMenus() {
   play->addAction(tr("Step &Back"), QKeySequence(Qt::Key_Left), this, [this] { playback_->Step(-1); });
   play->addAction(tr("Forward 10 Frames"), QKeySequence(Qt::SHIFT | Qt::Key_Right), this,
                   [this] { playback_->Step(10); });
-  play->addAction(tr("Back 10 Frames"), QKeySequence(Qt::SHIFT | Qt::Key_Left), this,
-                  [this] { playback_->Step(-10); });
+  play->addAction(tr("Back 10 Frames"), QKeySequence(Qt::SHIFT | Qt::Key_Left), this, [this] { playback_->Step(-10); });
   play->addAction(tr("To &Start"), QKeySequence(Qt::Key_Home), this, [this] { playback_->Step(-playback_->frames()); });
   play->addAction(tr("To &End"), QKeySequence(Qt::Key_End), this, [this] { playback_->Step(playback_->frames()); });
 }
@@ -251,9 +250,7 @@ void MainWindow::UpdateRecentMenu() {
   recent_menu_->setEnabled(!list.isEmpty());
 }
 
-QString MainWindow::corpus_path() const {
-  return corpus_ ? QString::fromStdString(corpus_->path()) : QString();
-}
+QString MainWindow::corpus_path() const { return corpus_ ? QString::fromStdString(corpus_->path()) : QString(); }
 
 void MainWindow::UpdateTitle() {
   QString title = QStringLiteral("csw-workbench");
@@ -449,8 +446,8 @@ void MainWindow::ChooseAndExportPlot() {
 }
 
 void MainWindow::ChooseAndExport3d() {
-  QString path = QFileDialog::getSaveFileName(this, tr("Export 3D View Figure"),
-                                              settings_->value("lastDir").toString(), kFigureFilter);
+  QString path = QFileDialog::getSaveFileName(this, tr("Export 3D View Figure"), settings_->value("lastDir").toString(),
+                                              kFigureFilter);
   if (!path.isEmpty()) Export3dView(path);
 }
 
@@ -495,16 +492,16 @@ void MainWindow::ShowImportDialog() {
   connect(buttons, &QDialogButtonBox::accepted, &dialog, &QDialog::accept);
   connect(buttons, &QDialogButtonBox::rejected, &dialog, &QDialog::reject);
   connect(add, &QPushButton::clicked, &dialog, [&] {
-    QStringList chosen = QFileDialog::getOpenFileNames(
-        &dialog, tr("Add Files"), settings_->value("lastDir").toString(),
-        tr("Captures and labels (*.c3d *.trc *.TextGrid *.eaf *.wav);;All files (*)"));
+    QStringList chosen =
+        QFileDialog::getOpenFileNames(&dialog, tr("Add Files"), settings_->value("lastDir").toString(),
+                                      tr("Captures and labels (*.c3d *.trc *.TextGrid *.eaf *.wav);;All files (*)"));
     if (!chosen.isEmpty()) settings_->setValue("lastDir", QFileInfo(chosen.front()).absolutePath());
     files->addItems(chosen);
   });
   connect(remove, &QPushButton::clicked, &dialog, [&] { qDeleteAll(files->selectedItems()); });
   connect(corpus_browse, &QPushButton::clicked, &dialog, [&] {
-    QString p = QFileDialog::getSaveFileName(&dialog, tr("Corpus"), corpus->text(), tr("csw corpus (*.h5)"),
-                                             nullptr, QFileDialog::DontConfirmOverwrite);
+    QString p = QFileDialog::getSaveFileName(&dialog, tr("Corpus"), corpus->text(), tr("csw corpus (*.h5)"), nullptr,
+                                             QFileDialog::DontConfirmOverwrite);
     if (!p.isEmpty()) corpus->setText(p);
   });
   connect(set_browse, &QPushButton::clicked, &dialog, [&] {

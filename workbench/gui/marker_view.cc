@@ -416,8 +416,8 @@ void MarkerView::mouseMoveEvent(QMouseEvent* event) {
   last_pos_ = event->position();
   if ((event->position() - press_pos_).manhattanLength() > 3) dragged_ = true;
   if (!dragged_) return;
-  bool pan = drag_button_ == Qt::RightButton || drag_button_ == Qt::MiddleButton ||
-             (event->modifiers() & Qt::ShiftModifier);
+  bool pan =
+      drag_button_ == Qt::RightButton || drag_button_ == Qt::MiddleButton || (event->modifiers() & Qt::ShiftModifier);
   if (pan) {
     Pan(d.x(), d.y());
   } else {

@@ -101,11 +101,11 @@ class MarkerView : public QWidget {
   std::shared_ptr<const Take> take_;
   int64_t frame_ = 0;
   Camera camera_;
-  std::vector<std::pair<int, int>> sticks_;     // take columns
-  std::vector<std::vector<int>> clusters_;      // take columns per rigid cluster
+  std::vector<std::pair<int, int>> sticks_;  // take columns
+  std::vector<std::vector<int>> clusters_;   // take columns per rigid cluster
   std::vector<QString> cluster_names_;
   std::vector<int> head_columns_, face_columns_;  // for facing the talker on ResetView
-  std::vector<char> in_marker_set_;             // per column: bound by the marker set
+  std::vector<char> in_marker_set_;               // per column: bound by the marker set
   int selected_ = -1;
   QPointF press_pos_;
   QPointF last_pos_;

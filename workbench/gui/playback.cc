@@ -96,9 +96,10 @@ void Playback::StartAudio() {
   format.setSampleFormat(QAudioFormat::Float);
   if (device.isNull() || !device.isFormatSupported(format)) {
     if (!audio_note_given_) {
-      emit Note(device.isNull() ? tr("No audio output device: playback is silent.")
-                                : tr("The audio output cannot play %1 Hz float audio: playback is silent.")
-                                      .arg(format.sampleRate()));
+      emit Note(
+          device.isNull()
+              ? tr("No audio output device: playback is silent.")
+              : tr("The audio output cannot play %1 Hz float audio: playback is silent.").arg(format.sampleRate()));
       audio_note_given_ = true;
     }
     return;

@@ -16,10 +16,14 @@ const char* kCursorLayer = "cursor";
 
 QString QuantityName(MarkerQuantity q) {
   switch (q) {
-    case MarkerQuantity::kX: return QStringLiteral("x");
-    case MarkerQuantity::kY: return QStringLiteral("y");
-    case MarkerQuantity::kZ: return QStringLiteral("z");
-    case MarkerQuantity::kSpeed: return QStringLiteral("speed");
+    case MarkerQuantity::kX:
+      return QStringLiteral("x");
+    case MarkerQuantity::kY:
+      return QStringLiteral("y");
+    case MarkerQuantity::kZ:
+      return QStringLiteral("z");
+    case MarkerQuantity::kSpeed:
+      return QStringLiteral("speed");
   }
   return {};
 }
@@ -115,8 +119,8 @@ class TierPlottable : public QCPAbstractPlottable {
         painter->drawLine(QPointF(x0, area.top()), QPointF(x0, area.bottom()));
         painter->drawLine(QPointF(x1, area.top()), QPointF(x1, area.bottom()));
         if (box.width() > 14 && !it->text.empty()) {
-          QString text = metrics.elidedText(QString::fromStdString(it->text), Qt::ElideRight,
-                                            static_cast<int>(box.width()) - 4);
+          QString text =
+              metrics.elidedText(QString::fromStdString(it->text), Qt::ElideRight, static_cast<int>(box.width()) - 4);
           painter->setPen(QColor(20, 20, 20));
           painter->drawText(box, Qt::AlignCenter, text);
         }
@@ -428,7 +432,9 @@ void TimeSeriesPanel::resizeEvent(QResizeEvent* event) {
   Redecimate();
 }
 
-TimeSeriesPanel::LaneKind TimeSeriesPanel::lane_kind(int lane) const { return lanes_.at(static_cast<size_t>(lane))->kind; }
+TimeSeriesPanel::LaneKind TimeSeriesPanel::lane_kind(int lane) const {
+  return lanes_.at(static_cast<size_t>(lane))->kind;
+}
 QString TimeSeriesPanel::lane_name(int lane) const { return lanes_.at(static_cast<size_t>(lane))->name; }
 double TimeSeriesPanel::LaneViewStart(int lane) const {
   return lanes_.at(static_cast<size_t>(lane))->rect->axis(QCPAxis::atBottom)->range().lower;

@@ -81,8 +81,8 @@ class TimeSeriesPanel : public QWidget {
     QString name;
     QString unit;
     QCPAxisRect* rect = nullptr;
-    QCPGraph* graph = nullptr;        // audio and marker lanes
-    TierPlottable* tier = nullptr;    // tier and event lanes
+    QCPGraph* graph = nullptr;                    // audio and marker lanes
+    TierPlottable* tier = nullptr;                // tier and event lanes
     std::shared_ptr<const MinMaxPyramid> series;  // audio and marker lanes
     QCPItemStraightLine* cursor = nullptr;
     QCPItemText* readout = nullptr;

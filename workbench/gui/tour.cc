@@ -1,5 +1,7 @@
 #include "workbench/gui/tour.h"
 
+#include <qcustomplot.h>
+
 #include <QApplication>
 #include <QDir>
 #include <QDockWidget>
@@ -7,8 +9,6 @@
 #include <QFile>
 #include <QTimer>
 #include <fstream>
-
-#include <qcustomplot.h>
 
 #include "core/error.h"
 #include "io/corpus/corpus.h"
@@ -121,8 +121,9 @@ QStringList RunTour(const TourOptions& options) {
     window.marker_view()->Orbit(y_up ? 90 : -70, 0);
     window.marker_view()->Zoom(1.8);
     window.playback()->Seek(window.playback()->frames() / 3);
-    written << Shot(&window, options.out_dir,
-                    QStringLiteral("%1-%2.png").arg(shot++, 2, 10, QChar('0')).arg(y_up ? "real-face-capture" : "imported-take"));
+    written << Shot(
+        &window, options.out_dir,
+        QStringLiteral("%1-%2.png").arg(shot++, 2, 10, QChar('0')).arg(y_up ? "real-face-capture" : "imported-take"));
     window.marker_view()->SetYUp(false);
     if (y_up) break;
   }

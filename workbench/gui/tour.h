@@ -9,11 +9,11 @@
 namespace csw::gui {
 
 struct TourOptions {
-  QString out_dir;         // screenshots are written here
-  QString work_dir;        // demo corpus and scratch files
-  QStringList captures;    // captures (+ their .TextGrid/.wav) to import, e.g. the demo corpus
-  QString markerset;       // marker-set JSON drawn with the imported captures (optional)
-  QString damaged_file;    // a damaged or foreign file to open (optional; one is made when empty)
+  QString out_dir;       // screenshots are written here
+  QString work_dir;      // demo corpus and scratch files
+  QStringList captures;  // captures (+ their .TextGrid/.wav) to import, e.g. the demo corpus
+  QString markerset;     // marker-set JSON drawn with the imported captures (optional)
+  QString damaged_file;  // a damaged or foreign file to open (optional; one is made when empty)
 };
 
 // Returns the paths written; throws csw::Error when a step fails.
