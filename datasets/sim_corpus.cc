@@ -192,7 +192,12 @@ std::string TruthToJson(const SimulationResult& r) {
 
 void WriteTakeFiles(const SimulationResult& result, const SimulateOptions& options, const std::string& dir) {
   const fs::path base = fs::path(dir) / result.take.name;
-  WriteC3d(base.string() + ".c3d", result.take);
+  C3dWriteOptions c3d;
+  if (options.int16_c3d) {
+    c3d.storage = C3dWriteOptions::Storage::kInt16;
+    c3d.point_scale_mm = options.c3d_scale_mm;
+  }
+  WriteC3d(base.string() + ".c3d", result.take, c3d);
   if (!result.take.audio.samples.empty()) WriteWav(base.string() + ".wav", result.take.audio);
   WriteTextGrid(base.string() + ".TextGrid", result.take.tiers, 0.0, result.take.duration_s());
   if (options.write_truth) WriteText(base.string() + ".truth.json", TruthToJson(result) + "\n");
@@ -200,7 +205,7 @@ void WriteTakeFiles(const SimulationResult& result, const SimulateOptions& optio
     Take clean = result.take;
     clean.markers = result.clean;
     clean.name = result.take.name + ".clean";
-    WriteC3d(base.string() + ".clean.c3d", clean);
+    WriteC3d(base.string() + ".clean.c3d", clean, c3d);
   }
 }
 
@@ -319,6 +324,8 @@ void GenerateDemoCorpus(const std::string& out_dir, uint64_t seed, int sentences
   SimulateOptions o;
   o.seed = seed;
   o.write_clean = false;
+  o.write_truth = false;  // ground truth is for tests, which simulate their own takes
+  o.int16_c3d = true;     // keeps shapes + visemes + 20 sentences under 20 MB
   for (CorpusKind kind : {CorpusKind::kShapes, CorpusKind::kVisemes, CorpusKind::kSentences}) {
     o.kind = kind;
     o.count = kind == CorpusKind::kSentences ? sentences : 0;

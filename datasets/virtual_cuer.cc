@@ -106,6 +106,7 @@ std::string SimulateOptions::Check() const {
   if (!(placement_sd_mm >= 0.0 && placement_sd_mm <= 30.0)) return "placement_sd_mm must be in [0, 30]";
   if (!(orientation_sd_deg >= 0.0 && orientation_sd_deg <= 20.0)) return "orientation_sd_deg must be in [0, 20]";
   if (std::string why = phasing.Check(); !why.empty()) return "phasing: " + why;
+  if (int16_c3d && !(c3d_scale_mm > 0.0 && c3d_scale_mm <= 10.0)) return "c3d_scale_mm must be in (0, 10]";
   for (const auto& s : sentences)
     if (s.find_first_not_of(" \t\r\n") == std::string::npos) return "a sentence is empty";
   return "";

@@ -61,6 +61,10 @@ struct SimulateOptions {
   // Outputs of SimulateCorpus.
   bool write_truth = true;    // <name>.truth.json
   bool write_clean = false;   // <name>.clean.c3d (markers without artefacts)
+  // C3D storage: float (exact) or int16 at c3d_scale_mm steps (half the size; the
+  // demo corpus uses it — quantisation σ = scale/√12, far below the marker noise).
+  bool int16_c3d = false;
+  double c3d_scale_mm = 0.05;
   // Configuration overrides ("" = shipped files, compiled in).
   std::string hand_config_path;
   std::string placement_config_path;

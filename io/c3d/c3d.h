@@ -86,4 +86,15 @@ Take ReadC3d(const std::string& path);
 // Throws InvalidInput for a take C3D cannot hold, IoError when the file cannot be written.
 void WriteC3d(const std::string& path, const Take& take);
 
+// Storage of a written C3D. Int16 halves the file: coordinates are rounded to
+// multiples of point_scale_mm (a take whose |coordinates| exceed 32767 × scale is
+// refused with InvalidInput) and analog channels get a per-channel scale so their
+// largest magnitude maps to 32000 counts.
+struct C3dWriteOptions {
+  enum class Storage { kFloat, kInt16 };
+  Storage storage = Storage::kFloat;
+  double point_scale_mm = 0.1;  // kInt16 only
+};
+void WriteC3d(const std::string& path, const Take& take, const C3dWriteOptions& options);
+
 }  // namespace csw

@@ -1,4 +1,4 @@
-// C3D writer: Intel processor, float storage, millimetres.
+// C3D writer: Intel processor, float (or int16) storage, millimetres.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -147,7 +147,13 @@ struct FileCloser {
 
 }  // namespace
 
-void WriteC3d(const std::string& path, const Take& take) {
+void WriteC3d(const std::string& path, const Take& take) { WriteC3d(path, take, C3dWriteOptions{}); }
+
+void WriteC3d(const std::string& path, const Take& take, const C3dWriteOptions& options) {
+  const bool int16 = options.storage == C3dWriteOptions::Storage::kInt16;
+  if (int16 && !(options.point_scale_mm > 0 && std::isfinite(options.point_scale_mm)))
+    throw InvalidInput(path + ": int16 storage needs a positive point scale");
+  const float point_scale = int16 ? static_cast<float>(options.point_scale_mm) : kPointScale;
   const int64_t points = static_cast<int64_t>(take.marker_names.size());
   const int64_t frames = take.markers.frames();
   if (take.markers.markers() != points && !(take.markers.data().empty() && frames == 0)) {
@@ -180,13 +186,30 @@ void WriteC3d(const std::string& path, const Take& take) {
     throw InvalidInput(path + ": C3D writer supports at most 255 events");
   }
   const int64_t last_frame = take.first_frame + std::max<int64_t>(frames, 1) - 1;
+  // Int16: per-channel analog scales mapping each channel's largest magnitude to 32000.
+  std::vector<float> analog_scale(static_cast<size_t>(channels), 1.0f);
+  if (int16) {
+    const double limit = 32767.0 * static_cast<double>(point_scale);
+    for (float v : take.markers.data()) {
+      if (!std::isnan(v) && std::abs(static_cast<double>(v)) > limit) {
+        throw InvalidInput(path + ": coordinate " + std::to_string(v) + " mm does not fit int16 storage at scale " +
+                           std::to_string(point_scale) + " mm (limit " + std::to_string(limit) + " mm)");
+      }
+    }
+    for (int64_t c = 0; c < channels; ++c) {
+      double peak = 0.0;
+      for (int64_t i = c; i < static_cast<int64_t>(an.data.size()); i += channels)
+        if (std::isfinite(an.data[static_cast<size_t>(i)])) peak = std::max(peak, std::abs(static_cast<double>(an.data[static_cast<size_t>(i)])));
+      analog_scale[static_cast<size_t>(c)] = peak > 0 ? static_cast<float>(peak / 32000.0) : 1.0f;
+    }
+  }
 
   // --- parameters ---
   ParamWriter pw;
   enum { kPoint = 1, kAnalog = 2, kTrial = 3, kEvent = 4, kManufacturer = 5 };
   pw.Group(kPoint, "POINT", "3-D point parameters");
   pw.Int16(kPoint, "USED", {static_cast<uint16_t>(points)}, true);
-  pw.Float(kPoint, "SCALE", {kPointScale}, true);
+  pw.Float(kPoint, "SCALE", {point_scale}, true);
   pw.Float(kPoint, "RATE", {static_cast<float>(take.rate_hz)}, true);
   if (frames > 65535) {
     pw.Float(kPoint, "FRAMES", {static_cast<float>(frames)}, true);
@@ -209,7 +232,7 @@ void WriteC3d(const std::string& path, const Take& take) {
       desc.resize(static_cast<size_t>(channels));
       pw.StringSeries(kAnalog, "DESCRIPTIONS", desc);
     }
-    pw.Float(kAnalog, "SCALE", std::vector<float>(static_cast<size_t>(channels), 1.0f), false);
+    pw.Float(kAnalog, "SCALE", analog_scale, false);
     pw.Int16(kAnalog, "OFFSET", std::vector<uint16_t>(static_cast<size_t>(channels), 0), false);
   }
   pw.Group(kTrial, "TRIAL", "Trial parameters");
@@ -261,7 +284,7 @@ void WriteC3d(const std::string& path, const Take& take) {
   word(5, static_cast<uint16_t>(frames == 0 ? 0 : std::min<int64_t>(last_frame, 65535)));
   if (frames == 0) word(4, 1);
   word(6, 10);
-  c3d::StoreF32Le(header.data() + 12, kPointScale);
+  c3d::StoreF32Le(header.data() + 12, point_scale);
   word(9, static_cast<uint16_t>(data_start));
   word(10, static_cast<uint16_t>(subframes));
   c3d::StoreF32Le(header.data() + 20, static_cast<float>(take.rate_hz));
@@ -276,10 +299,38 @@ void WriteC3d(const std::string& path, const Take& take) {
   put(header.data(), header.size());
   put(section.data(), section.size());
   const int64_t frame_floats = 4 * points + subframes * channels;
+  const int64_t word_bytes = int16 ? 2 : 4;
   const int64_t chunk = std::max<int64_t>(1, (int64_t{1} << 20) / std::max<int64_t>(1, frame_floats));
   std::vector<unsigned char> buf;
   const float* mk = take.markers.data().data();
-  for (int64_t f0 = 0; f0 < frames; f0 += chunk) {
+  auto to_i16 = [](double v) {
+    double r = std::nearbyint(v);
+    return static_cast<uint16_t>(static_cast<int16_t>(std::clamp(r, -32767.0, 32767.0)));
+  };
+  for (int64_t f0 = 0; f0 < frames && int16; f0 += chunk) {
+    const int64_t n = std::min(chunk, frames - f0);
+    buf.resize(static_cast<size_t>(n * frame_floats * word_bytes));
+    unsigned char* o = buf.data();
+    for (int64_t fr = f0; fr < f0 + n; ++fr) {
+      for (int64_t m = 0; m < points; ++m, o += 8) {
+        const float* p = mk + (fr * points + m) * 3;
+        if (std::isnan(p[0]) || std::isnan(p[1]) || std::isnan(p[2])) {
+          for (int k = 0; k < 3; ++k) c3d::StoreU16Le(o + 2 * k, 0);
+          c3d::StoreU16Le(o + 6, 0xFFFF);  // residual word -1: missing
+        } else {
+          for (int k = 0; k < 3; ++k) c3d::StoreU16Le(o + 2 * k, to_i16(p[k] / static_cast<double>(point_scale)));
+          c3d::StoreU16Le(o + 6, 0);
+        }
+      }
+      const float* a = channels > 0 ? an.data.data() + fr * subframes * channels : nullptr;
+      for (int64_t k = 0; k < subframes * channels; ++k, o += 2) {
+        double v = std::isfinite(a[k]) ? a[k] : 0.0;
+        c3d::StoreU16Le(o, to_i16(v / static_cast<double>(analog_scale[static_cast<size_t>(k % channels)])));
+      }
+    }
+    put(buf.data(), buf.size());
+  }
+  for (int64_t f0 = 0; f0 < frames && !int16; f0 += chunk) {
     const int64_t n = std::min(chunk, frames - f0);
     buf.resize(static_cast<size_t>(n * frame_floats * 4));
     unsigned char* o = buf.data();
@@ -299,7 +350,7 @@ void WriteC3d(const std::string& path, const Take& take) {
     put(buf.data(), buf.size());
   }
   // pad the data to a whole block, as most readers expect
-  const int64_t data_bytes = frames * frame_floats * 4;
+  const int64_t data_bytes = frames * frame_floats * word_bytes;
   const int64_t pad = (c3d::kBlock - data_bytes % c3d::kBlock) % c3d::kBlock;
   std::vector<unsigned char> zeros(static_cast<size_t>(pad), 0);
   put(zeros.data(), zeros.size());

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "io/c3d/c3d.h"
 #include "tests/testing/testing.h"
@@ -95,6 +96,37 @@ TEST(C3dRoundTrip, PointsAnalogEventsNaNs) {
   ASSERT_EQ(back.provenance.sources.size(), 1u);
   EXPECT_EQ(back.provenance.sources[0].format, "c3d");
   EXPECT_EQ(back.provenance.sources[0].sha256.size(), 64u);
+}
+
+TEST(C3dRoundTrip, Int16StorageIsWithinHalfAScaleStep) {
+  testing::TempDir dir;
+  Take t = MakeTake(300, 9, 3, 4);
+  const std::string path = (dir / "int16.c3d").string();
+  C3dWriteOptions options;
+  options.storage = C3dWriteOptions::Storage::kInt16;
+  options.point_scale_mm = 0.05;
+  WriteC3d(path, t, options);
+  C3dReader reader(path);
+  EXPECT_EQ(reader.info().storage, "int16");
+  EXPECT_NEAR(reader.info().point_scale, 0.05, 1e-7);
+  Take back = ReadC3d(path);
+  ASSERT_EQ(back.frames(), t.frames());
+  for (size_t i = 0; i < t.markers.data().size(); ++i) {
+    float a = t.markers.data()[i], b = back.markers.data()[i];
+    ASSERT_EQ(std::isnan(a), std::isnan(b)) << i;
+    if (!std::isnan(a)) {
+      ASSERT_NEAR(a, b, 0.025 + 1e-4) << i;
+    }
+  }
+  ASSERT_EQ(back.analog.data.size(), t.analog.data.size());
+  for (size_t i = 0; i < t.analog.data.size(); ++i) ASSERT_NEAR(back.analog.data[i], t.analog.data[i], 1.0 / 32000) << i;
+  // Half the bytes of float storage (for the data part).
+  const std::string fpath = (dir / "float.c3d").string();
+  WriteC3d(fpath, t);
+  EXPECT_LT(std::filesystem::file_size(path), std::filesystem::file_size(fpath) * 6 / 10);
+  // Coordinates beyond 32767 steps are refused, not wrapped.
+  t.markers.at(0, 0)[0] = 5000.0f;
+  EXPECT_THROW(WriteC3d(path, t, options), InvalidInput);
 }
 
 TEST(C3dRoundTrip, MoreThan255LabelsGoToLabels2) {
