@@ -22,7 +22,6 @@ echo "== csw import (shapes, visemes, sentences)"
 for part in shapes visemes sentences; do
   shopt -s nullglob
   files=("$demo/$part"/*.c3d "$demo/$part"/*.TextGrid "$demo/$part"/*.wav)
-  files=("${files[@]/*.clean.c3d/}")
   "$csw" import "${files[@]}" --markerset "$demo/$part/markerset.json" -o out/demo/corpus.h5
 done
 echo "== csw info out/demo/corpus.h5"
