@@ -193,49 +193,8 @@ Eigen::Matrix3Xd VirtualCuer::KeyFrame(int placement, int shape, const Articulat
 }
 
 std::vector<KeyTiming> VirtualCuer::DrawTiming(const std::vector<Key>& keys, std::mt19937_64& rng) const {
-  const PhasingModel& model = options_.phasing;
-  if (!options_.overlap_gestures) return SampleTiming(keys, model, rng);
-  auto draw = [&](double mean, double sd) { return SampleTruncatedNormal(mean, sd, model.truncate_sd, rng); };
-  auto keep_min = [&](double& start, double& target) {
-    if (target - start < model.min_movement_s) {
-      double mid = 0.5 * (start + target);
-      start = mid - 0.5 * model.min_movement_s;
-      target = mid + 0.5 * model.min_movement_s;
-    }
-  };
-  std::vector<KeyTiming> out(keys.size());
-  int first_cued = -1;
-  double last_end = 0.0;
-  for (size_t i = 0; i < keys.size(); ++i) {
-    const Key& k = keys[i];
-    KeyTiming& t = out[i];
-    if (k.type == KeyType::kRest) {
-      if (first_cued < 0) continue;
-      const MovementTiming& r = model.rest;
-      const double ref = std::max(k.a1_s, last_end);
-      t.placement_start_s = ref + draw(r.start_mean_s, r.start_sd_s);
-      t.placement_target_s = ref + draw(r.target_mean_s, r.target_sd_s);
-      t.shape_start_s = ref + draw(r.start_mean_s, r.start_sd_s);
-      t.shape_target_s = ref + draw(r.target_mean_s, r.target_sd_s);
-    } else {
-      if (first_cued < 0) first_cued = static_cast<int>(i);
-      const MovementTiming& p = PlacementTiming(model, k.type);
-      const MovementTiming& s = ShapeTiming(model, k.type);
-      t.placement_start_s = k.a1_s + draw(p.start_mean_s, p.start_sd_s);
-      t.placement_target_s = k.a1_s + draw(p.target_mean_s, p.target_sd_s);
-      t.shape_start_s = k.a1_s + draw(s.start_mean_s, s.start_sd_s);
-      t.shape_target_s = k.a1_s + draw(s.target_mean_s, s.target_sd_s);
-      last_end = k.end_s;
-    }
-    keep_min(t.placement_start_s, t.placement_target_s);
-    keep_min(t.shape_start_s, t.shape_target_s);
-  }
-  const double leave = first_cued < 0 ? (keys.empty() ? 0.0 : keys.front().a1_s)
-                                      : std::min(out[static_cast<size_t>(first_cued)].placement_start_s,
-                                                 out[static_cast<size_t>(first_cued)].shape_start_s);
-  for (size_t i = 0; i < keys.size() && (first_cued < 0 || static_cast<int>(i) < first_cued); ++i)
-    out[i] = {leave, leave, leave, leave};
-  return out;
+  return SampleTiming(keys, options_.phasing, rng,
+                      options_.overlap_gestures ? TimingMode::kOverlapping : TimingMode::kSequential);
 }
 
 // ---------------------------------------------------------------- scripts

@@ -54,12 +54,14 @@ void Constrain(double lower, double min_s, double& start, double& target) {
     start = mid - 0.5 * min_s;
     target = mid + 0.5 * min_s;
   }
-  if (start < lower) start = lower;
-  if (target < start + min_s) target = start + min_s;
+  if (start < lower) {
+    start = lower;
+    if (target < start + min_s) target = start + min_s;
+  }
 }
 
 std::vector<KeyTiming> Timing(const std::vector<Key>& keys, const PhasingModel& model,
-                              const std::function<double(double, double)>& draw) {
+                              const std::function<double(double, double)>& draw, bool sequential = true) {
   if (std::string why = model.Check(); !why.empty()) throw InvalidInput("phasing model: " + why);
   std::vector<KeyTiming> out(keys.size());
   const double no_bound = -std::numeric_limits<double>::infinity();
@@ -90,8 +92,10 @@ std::vector<KeyTiming> Timing(const std::vector<Key>& keys, const PhasingModel& 
     }
     Constrain(placement_prev, model.min_movement_s, t.placement_start_s, t.placement_target_s);
     Constrain(shape_prev, model.min_movement_s, t.shape_start_s, t.shape_target_s);
-    placement_prev = t.placement_target_s;
-    shape_prev = t.shape_target_s;
+    if (sequential) {
+      placement_prev = t.placement_target_s;
+      shape_prev = t.shape_target_s;
+    }
   }
   // Leading rest keys: the hand is at rest until the first movement starts.
   const double leave =
@@ -214,10 +218,10 @@ double SampleTruncatedNormal(double mean, double sd, double k, std::mt19937_64& 
 }
 
 std::vector<KeyTiming> SampleTiming(const std::vector<Key>& keys, const PhasingModel& model,
-                                    std::mt19937_64& rng) {
-  return Timing(keys, model, [&](double mean, double sd) {
-    return SampleTruncatedNormal(mean, sd, model.truncate_sd, rng);
-  });
+                                    std::mt19937_64& rng, TimingMode mode) {
+  return Timing(
+      keys, model, [&](double mean, double sd) { return SampleTruncatedNormal(mean, sd, model.truncate_sd, rng); },
+      mode == TimingMode::kSequential);
 }
 
 PhasingMeans MeasurePhasing(const std::vector<Key>& keys, const std::vector<KeyTiming>& timing) {

@@ -73,8 +73,12 @@ const MovementTiming& ShapeTiming(const PhasingModel& model, KeyType type);
 // target of the same movement and lasts at least min_movement_s (the start moves
 // later, then the target). Deterministic for a given generator state.
 // Throws InvalidInput when the model fails Check().
+// kOverlapping skips the "after the previous target" bound (only the minimum
+// duration holds): movements then overlap and the drawn times keep the model's
+// means exactly; the virtual cuer blends overlapping gestures by superposition.
+enum class TimingMode { kSequential, kOverlapping };
 std::vector<KeyTiming> SampleTiming(const std::vector<Key>& keys, const PhasingModel& model,
-                                    std::mt19937_64& rng);
+                                    std::mt19937_64& rng, TimingMode mode = TimingMode::kSequential);
 
 // The mean timing (every draw at its mean, same constraints).
 std::vector<KeyTiming> MeanTiming(const std::vector<Key>& keys, const PhasingModel& model);
