@@ -530,8 +530,8 @@ TEST(VirtualCuer, TextGridsOpenInPraat) {
 TEST(VirtualCuer, SameSeedGivesByteIdenticalFiles) {
   testing::TempDir a, b, c;
   auto run = [](const fs::path& dir, int seed) {
-    std::string cmd = std::string("\"") + CSW_SIM_CORPUS_EXE + "\" \"" + dir.string() +
-                      "\" --kind sentences --count 2 --seed " + std::to_string(seed) + " 2>/dev/null";
+    std::string cmd = std::string("\"") + CSW_BINARY + "\" -q simulate sentences -o \"" + dir.string() +
+                      "\" --count 2 --seed " + std::to_string(seed) + " >/dev/null 2>&1";
     return std::system(cmd.c_str());
   };
   ASSERT_EQ(run(a.path(), 5), 0);
