@@ -1,0 +1,349 @@
+#include "models/rigid_motion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+
+#include <Eigen/SVD>
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include "core/error.h"
+
+namespace csw {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+bool ColumnFinite(const Eigen::Matrix3Xd& m, Eigen::Index c) { return m.col(c).allFinite(); }
+
+// Least-squares rotation and translation with observed ~ R ref + t over the
+// given columns. Returns false if the reference points are (nearly) collinear.
+bool Kabsch(const Eigen::Matrix3Xd& ref, const Eigen::Matrix3Xd& obs, const std::vector<int>& cols,
+            RigidTransform* out) {
+  if (cols.size() < 3) return false;
+  Eigen::Vector3d ref_mean = Eigen::Vector3d::Zero();
+  Eigen::Vector3d obs_mean = Eigen::Vector3d::Zero();
+  for (int c : cols) {
+    ref_mean += ref.col(c);
+    obs_mean += obs.col(c);
+  }
+  ref_mean /= static_cast<double>(cols.size());
+  obs_mean /= static_cast<double>(cols.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d ref_scatter = Eigen::Matrix3d::Zero();
+  for (int c : cols) {
+    const Eigen::Vector3d a = ref.col(c) - ref_mean;
+    cov += (obs.col(c) - obs_mean) * a.transpose();
+    ref_scatter += a * a.transpose();
+  }
+  // Rotation is determined only if the reference spans at least a plane.
+  Eigen::JacobiSVD<Eigen::Matrix3d> scatter_svd(ref_scatter);
+  const Eigen::Vector3d sv = scatter_svd.singularValues();
+  if (!(sv(0) > 0.0) || sv(1) < 1e-10 * sv(0)) return false;
+
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) d(2, 2) = -1.0;  // no reflection
+  out->rotation = svd.matrixU() * d * svd.matrixV().transpose();
+  out->translation = obs_mean - out->rotation * ref_mean;
+  return true;
+}
+
+void FillResiduals(const Eigen::Matrix3Xd& ref, const Eigen::Matrix3Xd& obs, RigidFit* fit) {
+  fit->per_marker_residual_mm = Eigen::VectorXd::Constant(ref.cols(), kNaN);
+  double sum = 0.0;
+  for (int c : fit->used_markers) {
+    const double r = (fit->transform.Apply(ref.col(c)) - obs.col(c)).norm();
+    fit->per_marker_residual_mm(c) = r;
+    sum += r * r;
+  }
+  fit->rms_mm = fit->used_markers.empty() ? kNaN : std::sqrt(sum / static_cast<double>(fit->used_markers.size()));
+}
+
+std::vector<int> UsableColumns(const Eigen::Matrix3Xd& reference, const Eigen::Matrix3Xd& observed) {
+  if (reference.cols() != observed.cols()) {
+    throw InvalidInput("rigid fit: reference has " + std::to_string(reference.cols()) + " markers, observation has " +
+                       std::to_string(observed.cols()));
+  }
+  std::vector<int> cols;
+  for (Eigen::Index c = 0; c < reference.cols(); ++c) {
+    if (ColumnFinite(reference, c) && ColumnFinite(observed, c)) cols.push_back(static_cast<int>(c));
+  }
+  return cols;
+}
+
+// Residual of one marker: R(aa) * ref + t - obs, in millimetres.
+struct MarkerResidual {
+  MarkerResidual(const Eigen::Vector3d& ref, const Eigen::Vector3d& obs) : ref_(ref), obs_(obs) {}
+  template <typename T>
+  bool operator()(const T* const pose, T* residual) const {
+    const T p[3] = {T(ref_(0)), T(ref_(1)), T(ref_(2))};
+    T q[3];
+    ceres::AngleAxisRotatePoint(pose, p, q);
+    for (int i = 0; i < 3; ++i) residual[i] = q[i] + pose[3 + i] - T(obs_(i));
+    return true;
+  }
+  Eigen::Vector3d ref_;
+  Eigen::Vector3d obs_;
+};
+
+double RobustCost(double squared, const RigidOptions& options) {
+  const double a2 = options.loss_scale_mm * options.loss_scale_mm;
+  switch (options.loss) {
+    case RobustLoss::kNone:
+      return squared;
+    case RobustLoss::kHuber:
+      return squared <= a2 ? squared : 2.0 * options.loss_scale_mm * std::sqrt(squared) - a2;
+    case RobustLoss::kCauchy:
+      return a2 * std::log1p(squared / a2);
+  }
+  return squared;
+}
+
+double TotalRobustCost(const Eigen::Matrix3Xd& ref, const Eigen::Matrix3Xd& obs, const std::vector<int>& cols,
+                       const RigidTransform& t, const RigidOptions& options) {
+  double cost = 0.0;
+  for (int c : cols) cost += RobustCost((t.Apply(ref.col(c)) - obs.col(c)).squaredNorm(), options);
+  return cost;
+}
+
+}  // namespace
+
+RigidTransform RigidTransform::Inverse() const {
+  RigidTransform inv;
+  inv.rotation = rotation.transpose();
+  inv.translation = -(inv.rotation * translation);
+  return inv;
+}
+
+Eigen::Matrix<double, 6, 1> RigidTransform::Parameters() const {
+  Eigen::Matrix<double, 6, 1> p;
+  double r[9];
+  Eigen::Map<Eigen::Matrix3d> rm(r);
+  rm = rotation;
+  double aa[3];
+  ceres::RotationMatrixToAngleAxis(r, aa);  // column-major 3x3
+  p << aa[0], aa[1], aa[2], translation(0), translation(1), translation(2);
+  return p;
+}
+
+RigidTransform RigidTransform::FromParameters(const Eigen::Matrix<double, 6, 1>& p) {
+  RigidTransform t;
+  const double aa[3] = {p(0), p(1), p(2)};
+  double r[9];
+  ceres::AngleAxisToRotationMatrix(aa, r);  // column-major 3x3
+  t.rotation = Eigen::Map<const Eigen::Matrix3d>(r);
+  t.translation = p.tail<3>();
+  return t;
+}
+
+RigidFit EstimateRigidKabsch(const Eigen::Matrix3Xd& reference, const Eigen::Matrix3Xd& observed) {
+  RigidFit fit;
+  fit.used_markers = UsableColumns(reference, observed);
+  fit.valid = Kabsch(reference, observed, fit.used_markers, &fit.transform);
+  fit.converged = fit.valid;
+  if (!fit.valid) fit.transform = RigidTransform{};
+  FillResiduals(reference, observed, &fit);
+  if (!fit.valid) fit.rms_mm = kNaN;
+  return fit;
+}
+
+RigidFit EstimateRigid(const Eigen::Matrix3Xd& reference, const Eigen::Matrix3Xd& observed,
+                       const RigidOptions& options) {
+  if (options.loss != RobustLoss::kNone && !(options.loss_scale_mm > 0.0)) {
+    throw InvalidInput("rigid fit: loss_scale_mm must be positive");
+  }
+  RigidFit fit = EstimateRigidKabsch(reference, observed);
+  if (!fit.valid || options.loss == RobustLoss::kNone) return fit;
+
+  // Start: the full Kabsch fit, or a leave-one-out fit if that has a lower
+  // robust cost (a single gross outlier drags the full fit).
+  RigidTransform start = fit.transform;
+  double best = TotalRobustCost(reference, observed, fit.used_markers, start, options);
+  if (fit.used_markers.size() >= 4) {
+    for (size_t skip = 0; skip < fit.used_markers.size(); ++skip) {
+      std::vector<int> cols;
+      for (size_t i = 0; i < fit.used_markers.size(); ++i) {
+        if (i != skip) cols.push_back(fit.used_markers[i]);
+      }
+      RigidTransform t;
+      if (!Kabsch(reference, observed, cols, &t)) continue;
+      const double cost = TotalRobustCost(reference, observed, fit.used_markers, t, options);
+      if (cost < best) {
+        best = cost;
+        start = t;
+      }
+    }
+  }
+
+  Eigen::Matrix<double, 6, 1> pose = start.Parameters();
+  ceres::Problem problem;
+  for (int c : fit.used_markers) {
+    ceres::LossFunction* loss = nullptr;
+    if (options.loss == RobustLoss::kHuber) loss = new ceres::HuberLoss(options.loss_scale_mm);
+    if (options.loss == RobustLoss::kCauchy) loss = new ceres::CauchyLoss(options.loss_scale_mm);
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<MarkerResidual, 3, 6>(
+                                 new MarkerResidual(reference.col(c), observed.col(c))),
+                             loss, pose.data());
+  }
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.max_num_iterations = std::max(1, options.max_iterations);
+  solver.function_tolerance = 1e-14;
+  solver.gradient_tolerance = 1e-16;
+  solver.parameter_tolerance = 1e-14;
+  solver.num_threads = 1;
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  fit.converged = summary.termination_type == ceres::CONVERGENCE;
+  if (pose.allFinite()) {
+    const RigidTransform refined = RigidTransform::FromParameters(pose);
+    // Keep the better of start and refined (Ceres never worsens, but guard NaN).
+    if (TotalRobustCost(reference, observed, fit.used_markers, refined, options) <= best) {
+      fit.transform = refined;
+    } else {
+      fit.transform = start;
+    }
+  } else {
+    fit.transform = start;
+  }
+  FillResiduals(reference, observed, &fit);
+  return fit;
+}
+
+Eigen::Matrix3Xd ClusterReference(const MarkerArray& markers, const std::vector<int>& columns) {
+  if (columns.size() < 3) throw InvalidInput("cluster reference: need at least 3 markers");
+  for (int c : columns) {
+    if (c < 0 || c >= markers.markers()) {
+      throw InvalidInput("cluster reference: marker column " + std::to_string(c) + " out of range");
+    }
+  }
+  const Eigen::Index n = static_cast<Eigen::Index>(columns.size());
+  std::vector<Eigen::Matrix3Xd> complete;
+  for (int64_t f = 0; f < markers.frames(); ++f) {
+    Eigen::Matrix3Xd m(3, n);
+    bool all = true;
+    for (Eigen::Index i = 0; i < n && all; ++i) {
+      const float* p = markers.at(f, columns[static_cast<size_t>(i)]);
+      all = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+      m.col(i) << p[0], p[1], p[2];
+    }
+    if (all) complete.push_back(std::move(m));
+  }
+  if (complete.empty()) throw InvalidInput("cluster reference: no frame has all cluster markers visible");
+
+  std::vector<int> all_cols(columns.size());
+  for (size_t i = 0; i < all_cols.size(); ++i) all_cols[i] = static_cast<int>(i);
+  Eigen::Matrix3Xd mean = complete.front().colwise() - complete.front().rowwise().mean();
+  for (int round = 0; round < 4; ++round) {
+    Eigen::Matrix3Xd sum = Eigen::Matrix3Xd::Zero(3, n);
+    int64_t used = 0;
+    for (const Eigen::Matrix3Xd& m : complete) {
+      RigidTransform t;  // maps the mean shape onto this frame
+      if (!Kabsch(mean, m, all_cols, &t)) continue;
+      const RigidTransform inv = t.Inverse();
+      sum += (inv.rotation * m).colwise() + inv.translation;
+      ++used;
+    }
+    if (used == 0) throw InvalidInput("cluster reference: the cluster markers are collinear");
+    mean = sum / static_cast<double>(used);
+    mean = mean.colwise() - mean.rowwise().mean();
+  }
+  return mean;
+}
+
+int64_t RigidSeries::CountValid() const { return std::count(valid.begin(), valid.end(), uint8_t{1}); }
+
+RigidTransform RigidSeries::Transform(int64_t frame) const {
+  return RigidTransform::FromParameters(parameters.row(static_cast<Eigen::Index>(frame)).transpose());
+}
+
+Eigen::MatrixXd RigidSeries::ValidParameters() const {
+  Eigen::MatrixXd out(CountValid(), 6);
+  Eigen::Index r = 0;
+  for (int64_t f = 0; f < frames(); ++f) {
+    if (valid[static_cast<size_t>(f)]) out.row(r++) = parameters.row(static_cast<Eigen::Index>(f));
+  }
+  return out;
+}
+
+RigidSeries EstimateRigidSeries(const MarkerArray& markers, const std::vector<int>& cluster_columns,
+                                const Eigen::Matrix3Xd& reference, const RigidOptions& options,
+                                Progress* progress) {
+  const Eigen::Index n = static_cast<Eigen::Index>(cluster_columns.size());
+  if (reference.cols() != n) {
+    throw InvalidInput("rigid series: reference has " + std::to_string(reference.cols()) + " markers, cluster has " +
+                       std::to_string(n));
+  }
+  for (int c : cluster_columns) {
+    if (c < 0 || c >= markers.markers()) {
+      throw InvalidInput("rigid series: marker column " + std::to_string(c) + " out of range");
+    }
+  }
+  const int64_t frames = markers.frames();
+  RigidSeries s;
+  s.columns = cluster_columns;
+  s.reference = reference;
+  s.parameters = Eigen::MatrixXd::Constant(frames, 6, kNaN);
+  s.rms_mm = Eigen::VectorXd::Constant(frames, kNaN);
+  s.residual_mm = Eigen::MatrixXd::Constant(frames, n, kNaN);
+  s.valid.assign(static_cast<size_t>(frames), 0);
+  s.converged.assign(static_cast<size_t>(frames), 0);
+  Eigen::Matrix3Xd obs(3, n);
+  for (int64_t f = 0; f < frames; ++f) {
+    if (progress && f % 1024 == 0) progress->Update("rigid motion", static_cast<double>(f) / static_cast<double>(frames));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const float* p = markers.at(f, cluster_columns[static_cast<size_t>(i)]);
+      obs.col(i) << p[0], p[1], p[2];  // NaN stays NaN
+    }
+    const RigidFit fit = EstimateRigid(reference, obs, options);
+    if (!fit.valid) continue;
+    const Eigen::Index r = static_cast<Eigen::Index>(f);
+    s.valid[static_cast<size_t>(f)] = 1;
+    s.converged[static_cast<size_t>(f)] = fit.converged ? 1 : 0;
+    s.parameters.row(r) = fit.transform.Parameters().transpose();
+    s.rms_mm(r) = fit.rms_mm;
+    s.residual_mm.row(r) = fit.per_marker_residual_mm.transpose();
+  }
+  if (progress) progress->Update("rigid motion", 1.0);
+  return s;
+}
+
+namespace {
+
+MarkerArray ApplySeries(const MarkerArray& in, const RigidSeries& series, bool to_local) {
+  if (in.frames() != series.frames()) {
+    throw InvalidInput("rigid series has " + std::to_string(series.frames()) + " frames, markers have " +
+                       std::to_string(in.frames()));
+  }
+  MarkerArray out(in.frames(), in.markers());
+  for (int64_t f = 0; f < in.frames(); ++f) {
+    if (!series.valid[static_cast<size_t>(f)]) continue;
+    RigidTransform t = series.Transform(f);
+    if (to_local) t = t.Inverse();
+    for (int64_t m = 0; m < in.markers(); ++m) {
+      if (!in.Visible(f, m)) continue;
+      const float* p = in.at(f, m);
+      const Eigen::Vector3d q = t.Apply(Eigen::Vector3d(p[0], p[1], p[2]));
+      float* o = out.at(f, m);
+      for (int i = 0; i < 3; ++i) o[i] = static_cast<float>(q(i));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+MarkerArray ToLocalFrame(const MarkerArray& markers, const RigidSeries& series) {
+  return ApplySeries(markers, series, true);
+}
+
+MarkerArray ToLabFrame(const MarkerArray& local, const RigidSeries& series) {
+  return ApplySeries(local, series, false);
+}
+
+}  // namespace csw
