@@ -1,5 +1,6 @@
 #include "models/frame_selection.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <string>
@@ -75,13 +76,15 @@ FrameSelection SelectTrainingFrames(const MarkerArray& markers, const std::vecto
   }
 
   const double d = min_distance_mm;
-  const double d2 = d * d;
   std::unordered_map<std::array<int64_t, 3>, std::vector<int64_t>, CellHash> grid;
-  auto cell_of = [&](const float* p) {
-    return std::array<int64_t, 3>{static_cast<int64_t>(std::floor(p[0] / d)),
-                                  static_cast<int64_t>(std::floor(p[1] / d)),
-                                  static_cast<int64_t>(std::floor(p[2] / d))};
+  // Clamped so that hostile coordinates (1e38 mm, a tiny d) cannot overflow the
+  // conversion; clamped cells only merge far-away points, which the exact check
+  // below still tells apart.
+  auto index_of = [&](float v) {
+    const double c = std::floor(static_cast<double>(v) / d);
+    return static_cast<int64_t>(std::clamp(c, -4.0e18, 4.0e18));
   };
+  auto cell_of = [&](const float* p) { return std::array<int64_t, 3>{index_of(p[0]), index_of(p[1]), index_of(p[2])}; };
   // True when every chosen marker of frames a and b is within d (distance < d).
   auto close = [&](int64_t a, int64_t b) {
     for (size_t i = 0; i < n; ++i) {
@@ -92,7 +95,7 @@ FrameSelection SelectTrainingFrames(const MarkerArray& markers, const std::vecto
         const double diff = static_cast<double>(p[k]) - q[k];
         s += diff * diff;
       }
-      if (s >= d2) return false;
+      if (std::sqrt(s) >= d) return false;
     }
     return true;
   };

@@ -39,6 +39,8 @@ bool Kabsch(const Eigen::Matrix3Xd& ref, const Eigen::Matrix3Xd& obs, const std:
     cov += (obs.col(c) - obs_mean) * a.transpose();
     ref_scatter += a * a.transpose();
   }
+  // Overflowing coordinates (hostile input) give no fit rather than NaN poses.
+  if (!cov.allFinite() || !ref_scatter.allFinite()) return false;
   // Rotation is determined only if the reference spans at least a plane.
   Eigen::JacobiSVD<Eigen::Matrix3d> scatter_svd(ref_scatter);
   const Eigen::Vector3d sv = scatter_svd.singularValues();
@@ -49,7 +51,7 @@ bool Kabsch(const Eigen::Matrix3Xd& ref, const Eigen::Matrix3Xd& obs, const std:
   if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) d(2, 2) = -1.0;  // no reflection
   out->rotation = svd.matrixU() * d * svd.matrixV().transpose();
   out->translation = obs_mean - out->rotation * ref_mean;
-  return true;
+  return out->rotation.allFinite() && out->translation.allFinite();
 }
 
 void FillResiduals(const Eigen::Matrix3Xd& ref, const Eigen::Matrix3Xd& obs, RigidFit* fit) {

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -113,6 +114,15 @@ TEST(FrameSelection, RejectsBadInput) {
   const FrameSelection none = SelectTrainingFrames(m, {0, 1}, 2.0);  // all missing
   EXPECT_TRUE(none.frames.empty());
   EXPECT_EQ(none.incomplete_frames, 3);
+  // Hostile values: huge and infinite coordinates, a tiny threshold.
+  MarkerArray h(4, 1);
+  Set(&h, 0, 0, 3e38, -3e38, 0);
+  Set(&h, 1, 0, 3e38, -3e38, 0);  // same as frame 0: dropped
+  Set(&h, 2, 0, std::numeric_limits<double>::infinity(), 0, 0);  // not finite: excluded
+  Set(&h, 3, 0, 0, 0, 1e-300);
+  const FrameSelection hs = SelectTrainingFrames(h, {0}, 1e-300);
+  EXPECT_EQ(hs.frames, (std::vector<int64_t>{0, 3}));
+  EXPECT_EQ(hs.incomplete_frames, 1);
 }
 
 }  // namespace

@@ -193,6 +193,16 @@ TEST(RigidMotion, FewerThanThreeVisibleIsInvalid) {
   Eigen::Matrix3Xd line(3, 3);
   line << 0, 1, 2, 0, 1, 2, 0, 1, 2;
   EXPECT_FALSE(EstimateRigid(line, line).valid);
+  // Infinite coordinates count as missing; overflowing ones give no fit.
+  Eigen::Matrix3Xd inf_obs = Apply(MakeTransform(0.1, 0, 0, 1, 2, 3), ref);
+  inf_obs(0, 0) = std::numeric_limits<double>::infinity();
+  const RigidFit five = EstimateRigid(ref, inf_obs);
+  EXPECT_TRUE(five.valid);
+  EXPECT_EQ(five.used_markers, (std::vector<int>{1, 2, 3, 4, 5}));
+  const Eigen::Matrix3Xd huge = ref * 1e307;
+  const RigidFit overflow = EstimateRigid(ref, huge);
+  EXPECT_FALSE(overflow.valid);
+  EXPECT_THROW(EstimateRigid(ref, ref.leftCols(3)), InvalidInput);
 }
 
 // A take: head cluster (markers 0..5) moving rigidly, plus two free markers.
