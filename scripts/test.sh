@@ -19,9 +19,16 @@ stamp "build (warnings as errors)"
 cmake -S . -B build/ci -G Ninja -DCSW_WERROR=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build build/ci -j"$jobs"
 stamp "tests"
-(cd build/ci && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 600)
+summary=$(mktemp)
+(cd build/ci && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 600) | tee "$summary"
+count_tests() { sed -n 's/.*tests passed, \([0-9]*\) tests failed out of \([0-9]*\).*/\2 \1/p' "$summary" | tail -n 1; }
+read -r total1 failed1 <<<"$(count_tests)"
 
-if [ "${CSW_TEST_QUICK:-0}" = 1 ]; then stamp "quick mode: done"; exit 0; fi
+if [ "${CSW_TEST_QUICK:-0}" = 1 ]; then
+  stamp "quick mode: done"
+  echo "tests: $((total1 - failed1)) passed, $failed1 failed"
+  exit 0
+fi
 
 stamp "build (ASan + UBSan)"
 cmake -S . -B build/asan -G Ninja -DCSW_WERROR=ON -DCSW_SANITIZE=ON -DCSW_BUILD_BENCH=OFF \
@@ -30,7 +37,8 @@ cmake --build build/asan -j"$jobs"
 stamp "tests under ASan + UBSan"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-(cd build/asan && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 900)
+(cd build/asan && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 900) | tee "$summary"
+read -r total2 failed2 <<<"$(count_tests)"
 
 stamp "build fuzzers (clang, libFuzzer + ASan + UBSan)"
 CC=clang CXX=clang++ cmake -S . -B build/fuzz -G Ninja -DCSW_FUZZ=ON -DCSW_BUILD_TESTS=OFF \
@@ -48,3 +56,6 @@ for f in build/fuzz/fuzz/fuzz_*; do
     $( [ -d "$seeds" ] && echo "$seeds" ) 2>&1 | tail -n 12
 done
 stamp "all test stages passed"
+rm -f "$summary"
+# Plain closing line: both ctest runs (plain and ASan+UBSan) together.
+echo "tests: $((total1 + total2 - failed1 - failed2)) passed, $((failed1 + failed2)) failed"
