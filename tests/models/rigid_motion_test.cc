@@ -1,5 +1,6 @@
 #include "models/rigid_motion.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -258,6 +259,7 @@ TEST(RigidMotion, SeriesReferenceAndFrames) {
     EXPECT_LT((t.translation - truth[static_cast<size_t>(f)].translation).norm(), 1e-3) << f;
   }
   EXPECT_EQ(series.ValidParameters().rows(), 199);
+  EXPECT_EQ(std::count(series.converged.begin(), series.converged.end(), uint8_t{1}), 199);
 
   // Local frame: the cluster markers sit at the reference; lab frame is recovered.
   const MarkerArray local = ToLocalFrame(take, series);
