@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/json_util.h"
 
 namespace csw {
 
@@ -104,16 +105,7 @@ std::vector<std::string> MarkerSet::AllMarkers() const {
 }
 
 MarkerSet ParseMarkerSet(const std::string& json_text, const std::string& file) {
-  json j;
-  try {
-    j = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    // e.byte is 1-based position of the error; turn it into a line number.
-    int64_t line = 1 + std::count(json_text.begin(), json_text.begin() + std::min<size_t>(e.byte, json_text.size()), '\n');
-    std::string msg = e.what();
-    auto p = msg.find("parse error");
-    throw ParseError({file, std::nullopt, line}, "invalid JSON: " + (p == std::string::npos ? msg : msg.substr(p)));
-  }
+  json j = ParseJsonText(json_text, file);
   const std::string where = file.empty() ? std::string("<marker set>") : file;
   if (!j.is_object()) throw InvalidInput(where + ": marker set must be a JSON object");
   static const std::set<std::string> kKeys = {"name", "description", "format", "version", "aliases",

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/json_util.h"
 
 namespace csw {
 
@@ -51,16 +52,7 @@ constexpr double kThumbTwistDeg = -55.0;       // thumb nail faces sideways
 // Frame indices: 0 forearm, 1 palm, 2 + 3 * finger + phalanx.
 int SegmentIndex(int finger, int phalanx) { return 2 + 3 * finger + phalanx; }
 
-json ParseJson(const std::string& text, const std::string& file) {
-  try {
-    return json::parse(text);
-  } catch (const json::parse_error& e) {
-    int64_t line = 1 + std::count(text.begin(), text.begin() + std::min<size_t>(e.byte, text.size()), '\n');
-    std::string msg = e.what();
-    auto p = msg.find("parse error");
-    throw ParseError({file, std::nullopt, line}, "invalid JSON: " + (p == std::string::npos ? msg : msg.substr(p)));
-  }
-}
+json ParseJson(const std::string& text, const std::string& file) { return ParseJsonText(text, file); }
 
 }  // namespace
 

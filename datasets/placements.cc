@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/json_util.h"
 #include "datasets/face_model.h"
 
 namespace csw {
@@ -24,15 +25,7 @@ const PlacementDef& PlacementConfig::At(int placement) const {
 
 PlacementConfig ParsePlacementConfig(const std::string& json_text, const std::string& file, const FaceModel* face) {
   const std::string where = file.empty() ? std::string("<placement config>") : file;
-  json j;
-  try {
-    j = json::parse(json_text);
-  } catch (const json::parse_error& e) {
-    int64_t line = 1 + std::count(json_text.begin(), json_text.begin() + std::min<size_t>(e.byte, json_text.size()), '\n');
-    std::string msg = e.what();
-    auto p = msg.find("parse error");
-    throw ParseError({where, std::nullopt, line}, "invalid JSON: " + (p == std::string::npos ? msg : msg.substr(p)));
-  }
+  json j = ParseJsonText(json_text, where);
   auto fail = [&](const std::string& what) -> void { throw InvalidInput(where + ": placement configuration: " + what); };
   if (!j.is_object() || !j.contains("placements") || !j["placements"].is_array()) fail("needs a \"placements\" array");
   PlacementConfig config;
