@@ -1,0 +1,65 @@
+#pragma once
+// Common pieces of model inversion (issue 4 §5): options, the per-frame result
+// and error statistics. The face (face_model.h) and hand (hand_model.h) models
+// each provide Invert*: for every frame, the cluster pose (6) and the shape
+// parameters are estimated together from the visible markers by nonlinear
+// least squares (ceres::TinySolver, Levenberg-Marquardt, analytic Jacobian),
+// warm-started from the previous solved frame; every model marker is then
+// reconstructed, so missing samples get a value.
+//
+// "Model-ordered" marker arrays: models never see a take's own column order.
+// The caller (workbench/jobs) binds the marker set and passes, per take, a
+// MarkerArray whose columns are the model's markers in the model's order
+// (cluster markers first, then shape markers; see each model's layout).
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/take.h"
+
+namespace csw {
+
+struct InversionOptions {
+  int max_iterations = 30;          // Levenberg-Marquardt iterations per frame
+  bool warm_start = true;           // start from the previous solved frame
+  // Tikhonov prior on the shape parameters, as a weight in mm per unit of
+  // parameter (parameters are normalised to unit sd on the training frames):
+  // adds residuals prior_mm · p_k. Keeps frames with few visible markers from
+  // running away; 0 disables.
+  double prior_mm = 0.05;
+  // Frames with fewer visible cluster markers than this, or fewer visible
+  // shape markers than min_shape_markers, are not solved (NaN rows).
+  int min_cluster_markers = 3;
+  int min_shape_markers = 3;
+};
+
+struct InversionResult {
+  Eigen::MatrixXd pose;     // frames × 6: rx ry rz (rad) tx ty tz (mm), cluster frame → lab; NaN when unsolved
+  Eigen::MatrixXd params;   // frames × P shape parameters; NaN when unsolved
+  MarkerArray reconstructed;  // frames × model markers (cluster then shape), lab mm; NaN when unsolved
+  // frames × model markers: |reconstructed − observed| in mm where the input
+  // sample is visible, NaN elsewhere (missing input or unsolved frame).
+  Eigen::MatrixXd error_mm;
+  std::vector<uint8_t> solved;     // frames
+  std::vector<uint8_t> converged;  // frames: the solver reported convergence
+  int64_t frames() const { return static_cast<int64_t>(solved.size()); }
+};
+
+struct ErrorStats {
+  int64_t count = 0;  // finite samples
+  double mean = 0;    // mean absolute error (mm)
+  double sd = 0;      // sample sd (divisor count − 1; 0 when count < 2)
+  double max = 0;
+};
+
+// Statistics of the finite entries of error_mm restricted to the given columns
+// (empty = all columns) and rows [first, first + count) (count < 0 = to the end).
+ErrorStats SummariseErrors(const Eigen::MatrixXd& error_mm, const std::vector<int>& columns = {},
+                           int64_t first = 0, int64_t count = -1);
+
+// Marker arrays (frames × markers) → per-sample Euclidean distance (mm),
+// NaN where either is missing. Throws InvalidInput on a shape mismatch.
+Eigen::MatrixXd MarkerDistances(const MarkerArray& a, const MarkerArray& b);
+
+}  // namespace csw
