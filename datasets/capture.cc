@@ -96,8 +96,8 @@ void ApplyCaptureArtefacts(const VirtualCuer& cuer, const CaptureSetup& setup, s
   const int64_t nm = r.clean.markers();
   const int nf = static_cast<int>(r.face_columns.size());
   const bool hand = !r.hand_columns.empty();
-  const HandModel& hm = cuer.hand();
-  const FaceModel& fm = cuer.face();
+  const VirtualHand& hm = cuer.hand();
+  const VirtualFace& fm = cuer.face();
   r.state.assign(static_cast<size_t>(frames * nm), kVisible);
 
   // Per hand marker: its segment name and the capsules it may not be hidden by.

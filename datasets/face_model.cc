@@ -122,7 +122,7 @@ Eigen::Isometry3d HeadMotion::Weighted(double weight) const {
   return x;
 }
 
-FaceModel::FaceModel() {
+VirtualFace::VirtualFace() {
   std::vector<MarkerSpec> specs = Specs();
   const auto n = static_cast<Eigen::Index>(specs.size());
   neutral_.resize(3, n);
@@ -162,19 +162,19 @@ FaceModel::FaceModel() {
     }
 }
 
-int FaceModel::MarkerIndex(const std::string& name) const {
+int VirtualFace::MarkerIndex(const std::string& name) const {
   for (size_t i = 0; i < names_.size(); ++i)
     if (names_[i] == name) return static_cast<int>(i);
   return -1;
 }
 
-Eigen::Matrix3Xd FaceModel::MarkersInHead(const ArticulatoryVector& p) const {
+Eigen::Matrix3Xd VirtualFace::MarkersInHead(const ArticulatoryVector& p) const {
   Eigen::Matrix3Xd out = neutral_;
   for (int k = 0; k < kNumArticulatory; ++k) out += p[k] * basis_[static_cast<size_t>(k)];
   return out;
 }
 
-Eigen::Matrix3Xd FaceModel::MarkersMoved(const ArticulatoryVector& p, const HeadMotion& motion) const {
+Eigen::Matrix3Xd VirtualFace::MarkersMoved(const ArticulatoryVector& p, const HeadMotion& motion) const {
   Eigen::Matrix3Xd out = MarkersInHead(p);
   const Eigen::Isometry3d full = motion.Weighted(1.0);
   for (Eigen::Index i = 0; i < out.cols(); ++i) {

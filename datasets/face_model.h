@@ -36,9 +36,9 @@ struct HeadMotion {
   Eigen::Isometry3d Weighted(double weight) const;
 };
 
-class FaceModel {
+class VirtualFace {
  public:
-  FaceModel();  // the built-in 63-marker face
+  VirtualFace();  // the built-in 63-marker face
 
   int num_markers() const { return static_cast<int>(names_.size()); }
   const std::vector<std::string>& marker_names() const { return names_; }

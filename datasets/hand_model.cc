@@ -162,11 +162,11 @@ HandConfig DefaultHandConfig() { return ParseHandConfig(DefaultHandConfigJson(),
 
 // ---------------------------------------------------------------- model
 
-struct HandModel::Frames {
+struct VirtualHand::Frames {
   Eigen::Isometry3d frame[17];
 };
 
-HandModel::HandModel(HandConfig config) : config_(std::move(config)) {
+VirtualHand::VirtualHand(HandConfig config) : config_(std::move(config)) {
   static const char* kSuffix[5][4] = {{"thumb_cmc_flex", "thumb_cmc_abd", "thumb_mcp", "thumb_ip"},
                                       {"index_mcp_flex", "index_mcp_abd", "index_pip", "index_dip"},
                                       {"middle_mcp_flex", "middle_mcp_abd", "middle_pip", "middle_dip"},
@@ -261,7 +261,7 @@ HandModel::HandModel(HandConfig config) : config_(std::move(config)) {
     sticks_.emplace_back(a, b);
 }
 
-HandModel::Frames HandModel::ComputeFrames(const Eigen::VectorXd& angles) const {
+VirtualHand::Frames VirtualHand::ComputeFrames(const Eigen::VectorXd& angles) const {
   Frames fr;
   fr.frame[0] = Eigen::Isometry3d::Identity();
   fr.frame[1] = Make(Rx(-angles[wrist_flex_]) * Rz(angles[wrist_dev_]), Eigen::Vector3d::Zero());
@@ -285,7 +285,7 @@ HandModel::Frames HandModel::ComputeFrames(const Eigen::VectorXd& angles) const 
   return fr;
 }
 
-Eigen::Matrix3Xd HandModel::MarkersInForearm(const Eigen::VectorXd& angles) const {
+Eigen::Matrix3Xd VirtualHand::MarkersInForearm(const Eigen::VectorXd& angles) const {
   Frames fr = ComputeFrames(angles);
   Eigen::Matrix3Xd out(3, num_markers());
   for (size_t i = 0; i < markers_.size(); ++i) {
@@ -300,12 +300,12 @@ Eigen::Matrix3Xd HandModel::MarkersInForearm(const Eigen::VectorXd& angles) cons
   return out;
 }
 
-Eigen::Vector3d HandModel::TipInForearm(const Eigen::VectorXd& angles, Finger finger) const {
+Eigen::Vector3d VirtualHand::TipInForearm(const Eigen::VectorXd& angles, Finger finger) const {
   Frames fr = ComputeFrames(angles);
   return fr.frame[SegmentIndex(finger, 2)] * Eigen::Vector3d(0.0, kFingers[finger].length[2], 0.0);
 }
 
-std::vector<Capsule> HandModel::CapsulesInForearm(const Eigen::VectorXd& angles) const {
+std::vector<Capsule> VirtualHand::CapsulesInForearm(const Eigen::VectorXd& angles) const {
   Frames fr = ComputeFrames(angles);
   std::vector<Capsule> out;
   out.push_back({"forearm", Eigen::Vector3d(0.0, -25.0, 0.0), Eigen::Vector3d(0.0, -260.0, -5.0), 30.0});

@@ -55,11 +55,11 @@ struct Capsule {
   double radius = 0.0;
 };
 
-class HandModel {
+class VirtualHand {
  public:
   enum Finger { kThumb = 0, kIndex = 1, kMiddle = 2, kRing = 3, kLittle = 4 };
 
-  explicit HandModel(HandConfig config);
+  explicit VirtualHand(HandConfig config);
 
   const HandConfig& config() const { return config_; }
   int num_joints() const { return static_cast<int>(config_.joints.size()); }

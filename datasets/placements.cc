@@ -23,7 +23,7 @@ const PlacementDef& PlacementConfig::At(int placement) const {
   return placements[static_cast<size_t>(placement)];
 }
 
-PlacementConfig ParsePlacementConfig(const std::string& json_text, const std::string& file, const FaceModel* face) {
+PlacementConfig ParsePlacementConfig(const std::string& json_text, const std::string& file, const VirtualFace* face) {
   const std::string where = file.empty() ? std::string("<placement config>") : file;
   json j = ParseJsonText(json_text, where);
   auto fail = [&](const std::string& what) -> void { throw InvalidInput(where + ": placement configuration: " + what); };
@@ -65,7 +65,7 @@ PlacementConfig ParsePlacementConfig(const std::string& json_text, const std::st
   return config;
 }
 
-PlacementConfig LoadPlacementConfig(const std::string& path, const FaceModel* face) {
+PlacementConfig LoadPlacementConfig(const std::string& path, const VirtualFace* face) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, "cannot open");
   std::stringstream ss;
@@ -74,7 +74,7 @@ PlacementConfig LoadPlacementConfig(const std::string& path, const FaceModel* fa
 }
 
 PlacementConfig DefaultPlacementConfig() {
-  static const FaceModel face;
+  static const VirtualFace face;
   return ParsePlacementConfig(DefaultPlacementConfigJson(), "datasets/config/placements.json", &face);
 }
 
@@ -88,7 +88,7 @@ Eigen::Matrix3d ForearmOrientation(double frontal_rad, double pitch_rad, double 
          Eigen::AngleAxisd(twist_rad, Eigen::Vector3d::UnitY()).toRotationMatrix();
 }
 
-Eigen::Vector3d PlacementTarget(const PlacementDef& def, const FaceModel& face) {
+Eigen::Vector3d PlacementTarget(const PlacementDef& def, const VirtualFace& face) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (const auto& a : def.anchor) {
     int i = face.MarkerIndex(a);

@@ -9,7 +9,7 @@
 
 namespace csw {
 
-class FaceModel;
+class VirtualFace;
 
 struct PlacementDef {
   int placement = 0;                 // 0 rest, 1 side, 2 cheekbone, 3 mouth corner, 4 chin, 5 throat; 6 free space
@@ -32,8 +32,8 @@ struct PlacementConfig {
 // Throws ParseError (file, line) for malformed JSON, InvalidInput for a bad
 // definition (missing placement, unknown anchor marker when a face is given).
 PlacementConfig ParsePlacementConfig(const std::string& json_text, const std::string& file = "",
-                                     const FaceModel* face = nullptr);
-PlacementConfig LoadPlacementConfig(const std::string& path, const FaceModel* face = nullptr);
+                                     const VirtualFace* face = nullptr);
+PlacementConfig LoadPlacementConfig(const std::string& path, const VirtualFace* face = nullptr);
 const std::string& DefaultPlacementConfigJson();
 PlacementConfig DefaultPlacementConfig();
 
@@ -41,6 +41,6 @@ PlacementConfig DefaultPlacementConfig();
 // forward, then frontal (towards the cuer's left), pitch and twist.
 Eigen::Matrix3d ForearmOrientation(double frontal_rad, double pitch_rad, double twist_rad);
 // Target point of a placement in the head frame (neutral face).
-Eigen::Vector3d PlacementTarget(const PlacementDef& def, const FaceModel& face);
+Eigen::Vector3d PlacementTarget(const PlacementDef& def, const VirtualFace& face);
 
 }  // namespace csw

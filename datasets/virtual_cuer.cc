@@ -62,7 +62,7 @@ void ShiftUtterance(Utterance* u, double dt) {
 }
 
 // Placement parameters of a key: reference point (3), frontal, pitch, twist, contact.
-Eigen::VectorXd PlacementVector(const PlacementDef& d, const FaceModel& face) {
+Eigen::VectorXd PlacementVector(const PlacementDef& d, const VirtualFace& face) {
   Eigen::VectorXd z(7);
   z.head<3>() = PlacementTarget(d, face);
   z[3] = d.frontal_rad;
@@ -175,7 +175,7 @@ Eigen::Isometry3d VirtualCuer::ForearmInHead(int placement, int shape) const {
   const HandPosture& posture = hand_.config().Posture(shape);
   Eigen::Matrix3d rot = ForearmOrientation(d.frontal_rad, d.pitch_rad, d.twist_rad);
   Eigen::Vector3d tip = hand_.TipInForearm(
-      posture.angles, posture.reference_finger == "index" ? HandModel::kIndex : HandModel::kMiddle);
+      posture.angles, posture.reference_finger == "index" ? VirtualHand::kIndex : VirtualHand::kMiddle);
   Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
   x.linear() = rot;
   x.translation() = PlacementTarget(d, face_) - rot * tip;
@@ -408,8 +408,8 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
       motion.rotation += contact * contact_rotation;
       motion.translation += contact * contact_translation;
       Eigen::Matrix3d rot = ForearmOrientation(zv[3], zv[4], zv[5]);
-      Eigen::Vector3d tip = (1.0 - lambda) * hand_.TipInForearm(q, HandModel::kMiddle) +
-                            lambda * hand_.TipInForearm(q, HandModel::kIndex);
+      Eigen::Vector3d tip = (1.0 - lambda) * hand_.TipInForearm(q, VirtualHand::kMiddle) +
+                            lambda * hand_.TipInForearm(q, VirtualHand::kIndex);
       forearm_in_head.linear() = rot;
       forearm_in_head.translation() = zv.head<3>() - rot * tip;
       r.joint_angles.row(f) = q.transpose();

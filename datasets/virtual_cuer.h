@@ -103,7 +103,7 @@ struct SimulationResult {
   Eigen::Isometry3d head_reference = Eigen::Isometry3d::Identity();  // reference head frame in the lab
   std::vector<int> hand_columns;  // take columns of the hand markers (empty when no hand)
   std::vector<int> face_columns;  // take columns of the face markers (first columns)
-  std::vector<int> face_markers;  // FaceModel index of each face column
+  std::vector<int> face_markers;  // VirtualFace index of each face column
   std::vector<LabelSwap> swaps;
   std::vector<std::string> warnings;
   int64_t frames() const { return take.frames(); }
@@ -115,8 +115,8 @@ class VirtualCuer {
  public:
   explicit VirtualCuer(const SimulateOptions& options);  // throws InvalidInput for bad options/config
 
-  const HandModel& hand() const { return hand_; }
-  const FaceModel& face() const { return face_; }
+  const VirtualHand& hand() const { return hand_; }
+  const VirtualFace& face() const { return face_; }
   const PlacementConfig& placements() const { return placements_; }
   const SimulateOptions& options() const { return options_; }
 
@@ -158,8 +158,8 @@ class VirtualCuer {
   SimulationResult Run(const std::string& name, const Script& script) const;
 
   SimulateOptions options_;
-  HandModel hand_;
-  FaceModel face_;
+  VirtualHand hand_;
+  VirtualFace face_;
   PlacementConfig placements_;
 };
 

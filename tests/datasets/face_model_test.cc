@@ -8,8 +8,8 @@
 namespace csw {
 namespace {
 
-TEST(FaceModel, SixtyThreeMarkersWithRigidHeadSetAndEighteenThroatMarkers) {
-  FaceModel face;
+TEST(VirtualFace, SixtyThreeMarkersWithRigidHeadSetAndEighteenThroatMarkers) {
+  VirtualFace face;
   EXPECT_EQ(face.num_markers(), 63);
   EXPECT_GE(face.rigid_markers().size(), 4u);
   EXPECT_EQ(face.throat_markers().size(), 18u);
@@ -23,8 +23,8 @@ TEST(FaceModel, SixtyThreeMarkersWithRigidHeadSetAndEighteenThroatMarkers) {
     for (int k = 0; k < kNumArticulatory; ++k) EXPECT_EQ(face.basis(k).col(face.MarkerIndex(r)).norm(), 0.0);
 }
 
-TEST(FaceModel, MarkersAreLinearInTheArticulatoryParameters) {
-  FaceModel face;
+TEST(VirtualFace, MarkersAreLinearInTheArticulatoryParameters) {
+  VirtualFace face;
   ArticulatoryVector a, b;
   a << 10, 1, -3, 2, 1, 4;
   b << 2, -1, 5, 0, 3, -2;
@@ -40,8 +40,8 @@ TEST(FaceModel, MarkersAreLinearInTheArticulatoryParameters) {
   EXPECT_NEAR(d.norm(), 10.0 * std::hypot(51.0, 94.0) / 100.0, 1e-9);  // chin − TMJ = (0, 94, −51)
 }
 
-TEST(FaceModel, ThroatFollowsTheHeadWithItsWeight) {
-  FaceModel face;
+TEST(VirtualFace, ThroatFollowsTheHeadWithItsWeight) {
+  VirtualFace face;
   HeadMotion m;
   m.translation = Eigen::Vector3d(0.0, 10.0, 0.0);
   Eigen::Matrix3Xd moved = face.MarkersMoved(ArticulatoryVector::Zero(), m);
@@ -54,7 +54,7 @@ TEST(FaceModel, ThroatFollowsTheHeadWithItsWeight) {
 // Öhman coarticulation on a hand-built /aba/: vowel targets at the vowel
 // centres, full lip closure (resistance 1) inside the /b/, a jaw value between
 // the vowel's and the consonant's (resistance 0.4) inside the /b/.
-TEST(FaceModel, CoarticulationReachesVowelTargetsAndBilabialClosure) {
+TEST(VirtualFace, CoarticulationReachesVowelTargetsAndBilabialClosure) {
   std::vector<Phone> phones(5);
   const char* ipa[] = {"", "a", "b", "a", ""};
   const double t[] = {0.0, 0.3, 0.6, 0.7, 1.0, 1.3};

@@ -52,30 +52,30 @@ TEST(HandConfig, RejectsBadDefinitionsNamingTheRule) {
   EXPECT_THROW(ParseHandConfig(bad), InvalidInput);
 }
 
-TEST(HandModel, ForwardKinematicsKnownAnswers) {
-  HandModel hand(DefaultHandConfig());
+TEST(VirtualHand, ForwardKinematicsKnownAnswers) {
+  VirtualHand hand(DefaultHandConfig());
   Eigen::VectorXd q = Eigen::VectorXd::Zero(hand.num_joints());
   // Straight index: MCP at (-24, 86, 0), bones 42 + 25 + 20 mm fanned 4° towards the thumb.
-  Eigen::Vector3d tip = hand.TipInForearm(q, HandModel::kIndex);
+  Eigen::Vector3d tip = hand.TipInForearm(q, VirtualHand::kIndex);
   EXPECT_NEAR(tip.x(), -24.0 - 87.0 * std::sin(4.0 * kDeg), 1e-9);
   EXPECT_NEAR(tip.y(), 86.0 + 87.0 * std::cos(4.0 * kDeg), 1e-9);
   EXPECT_NEAR(tip.z(), 0.0, 1e-9);
   // MCP flexed 90°: the whole straight finger points into the palm (−z).
   q[hand.config().JointIndex("index_mcp_flex")] = 90.0 * kDeg;
-  tip = hand.TipInForearm(q, HandModel::kIndex);
+  tip = hand.TipInForearm(q, VirtualHand::kIndex);
   EXPECT_NEAR(tip.x(), -24.0, 1e-9);
   EXPECT_NEAR(tip.y(), 86.0, 1e-9);
   EXPECT_NEAR(tip.z(), -87.0, 1e-9);
   // Wrist flexed 90°: the palm frame turns about x, the middle MCP (-4, 88, 0) goes to (-4, 0, -88).
   q.setZero();
   q[hand.config().JointIndex("wrist_flex")] = 90.0 * kDeg;
-  tip = hand.TipInForearm(q, HandModel::kMiddle);
+  tip = hand.TipInForearm(q, VirtualHand::kMiddle);
   EXPECT_NEAR(tip.y(), 0.0, 1e-9);
   EXPECT_NEAR(tip.z(), -(88.0 + 46.0 + 29.0 + 21.0), 1e-9);
 }
 
-TEST(HandModel, FiftyMarkersWithTwoPerPhalanxAndARigidForearmCluster) {
-  HandModel hand(DefaultHandConfig());
+TEST(VirtualHand, FiftyMarkersWithTwoPerPhalanxAndARigidForearmCluster) {
+  VirtualHand hand(DefaultHandConfig());
   EXPECT_EQ(hand.num_markers(), 50);
   EXPECT_GE(hand.forearm_markers().size(), 3u);
   int phalanges = 0;
@@ -90,8 +90,8 @@ TEST(HandModel, FiftyMarkersWithTwoPerPhalanxAndARigidForearmCluster) {
 
 // Realism: soft tissue slides a fraction of a millimetre, so the distance
 // between two markers of one phalanx varies by < 2 mm over the joint range.
-TEST(HandModel, MarkerDistancesWithinAPhalanxVaryLessThanTwoMillimetres) {
-  HandModel hand(DefaultHandConfig());
+TEST(VirtualHand, MarkerDistancesWithinAPhalanxVaryLessThanTwoMillimetres) {
+  VirtualHand hand(DefaultHandConfig());
   std::mt19937_64 rng(7);
   std::map<std::string, int> col;
   for (int i = 0; i < hand.num_markers(); ++i) col[hand.marker_names()[static_cast<size_t>(i)]] = i;

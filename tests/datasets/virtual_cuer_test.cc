@@ -226,7 +226,7 @@ TEST(VirtualCuer, KeysReachTheirPostureAndPlacementAtTheirTargetTimes) {
         Eigen::VectorXd q = r.joint_angles.row(f).transpose();
         angle_err.push_back((q - g.posture).cwiseAbs().maxCoeff());
         Eigen::Vector3d tip = cuer.hand().TipInForearm(
-            q, posture.reference_finger == "index" ? HandModel::kIndex : HandModel::kMiddle);
+            q, posture.reference_finger == "index" ? VirtualHand::kIndex : VirtualHand::kMiddle);
         Eigen::Vector3d in_head = HeadAt(r, f).inverse() * (FromPose(r.forearm_pose, f) * tip);
         tip_err.push_back((in_head - g.placement_point).norm());
         // The key's own target is the configured one up to the per-key variability (2.5 sd).
