@@ -1,0 +1,114 @@
+#pragma once
+// The hand model of the seed (Gibert-Bailly-Elisei §3.2): forearm motion from
+// a rigid cluster (nmH); hand markers in the forearm frame; joint angles of
+// every hand segment relative to its parent (the forearm for a root segment);
+// PCA of the angles (naH parameters); regression from [1, cos, sin] of the
+// PCA-predicted angles to the hand marker coordinates (hand_regression.h).
+//
+// Layout of a model-ordered marker array (see inversion.h): the forearm
+// cluster markers, then the hand markers ("shape markers").
+//
+// Shape coordinates: the shape model (HandShapeModel) predicts, for naH
+// parameters, the hand markers in the forearm frame as one vector of
+// 3 × hand markers, marker by marker: (x0, y0, z0, x1, y1, z1, …).
+//
+// Segment frames (HandModel::Angles):
+//  - 3 markers: FrameFromMarkers(m0, m1, m2) (joint_angles.h).
+//  - more than 3: x from m0 to m1, z the normal of the least-squares plane of
+//    all its markers (smallest principal axis), made orthogonal to x and
+//    pointing to the side of x × Σ_{j≥2}(m_j − m0) (for 3 markers this is
+//    exactly FrameFromMarkers); degenerate when the markers are (nearly)
+//    collinear.
+//  - 2 markers (a phalanx): only the direction x = m0→m1 is observed; see below.
+// Joint angles are taken relative to each segment's REST orientation Q (its
+// mean orientation relative to its parent over the training frames, stored in
+// HandModel::rest), so that every joint works near zero, far from the Cardan
+// gimbal lock at spread = ±90° (a phalanx whose markers run along the finger
+// sits at ~90° from a palm frame whose x runs across the knuckles) and
+// independent of the forearm cluster's arbitrary axes:
+//    angles = JointAnglesFromRotation(Qᵀ · Rparentᵀ · Rsegment)
+// (Rparent = identity for a root segment: hand markers are in the forearm frame).
+// A 2-marker segment: its direction in Rparent·Q coordinates,
+// u = Ry(flexion)·Rz(spread)·e_x, gives flexion and spread; twist is not
+// observable and is reported as 0 (a constant column, which the regression
+// drops with a warning); its frame is Rparent·Q·Ry(flexion)·Rz(spread), so its
+// own children see a twist-free chain. Its rest Q is Ry(f̄)·Rz(s̄) of its mean
+// direction. Angles: 3 per segment, in segment order: flexion, spread, twist (radians).
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/progress.h"
+#include "core/take.h"
+#include "models/hand_regression.h"
+#include "models/inversion.h"
+#include "models/rigid_model.h"
+
+namespace csw {
+
+struct HandSegmentDef {
+  std::string name;
+  int parent = -1;           // index into HandLayout::segments, -1 = forearm; parents come first
+  std::vector<int> markers;  // indices into HandLayout::hand, ≥ 2 (≥ 3 for a root segment)
+};
+
+struct HandLayout {
+  std::vector<std::string> forearm;  // forearm cluster (≥ 3)
+  std::vector<std::string> hand;     // hand markers (every segment marker, plus any others)
+  std::vector<HandSegmentDef> segments;
+
+  int num_shape_markers() const { return static_cast<int>(hand.size()); }
+  int num_markers() const { return static_cast<int>(forearm.size() + hand.size()); }
+};
+
+struct HandModelOptions {
+  int angle_components = 12;        // naH (the seed retains 12)
+  double min_distance_mm = 2.0;     // training-frame selection
+  HandRegressionOptions regression; // ridge etc. (documented in hand_regression.h)
+  RigidModelOptions forearm;        // forearm cluster fit and motion PCA (nmH)
+};
+
+struct HandModel {
+  HandLayout layout;
+  RigidModel forearm;
+  std::vector<std::string> angle_names;  // "<segment>.flexion|spread|twist", 3 per segment
+  // Per segment: rest orientation relative to its parent (see above), fitted
+  // on the training frames. Empty = identity for every segment.
+  std::vector<Eigen::Matrix3d> rest;
+  HandShapeModel shape;                  // naH params → hand coordinates (forearm frame, 3 × hand markers)
+  // Scale of each PCA parameter (its training sd): inversion works on
+  // params / scale so that InversionOptions::prior_mm is per unit sd.
+  Eigen::VectorXd param_scale;
+  ModelInfo info;
+
+  int num_parameters() const { return shape.angle_pca.num_parameters(); }
+  // Joint angles of one frame's hand markers (forearm frame, 3 × hand markers);
+  // NaN angles where a segment's markers are missing or degenerate.
+  Eigen::VectorXd Angles(const Eigen::Matrix3Xd& hand_in_forearm) const;
+  // Hand markers in the lab for a forearm pose and shape parameters.
+  Eigen::Matrix3Xd ShapeMarkersInLab(const RigidTransform& pose, const Eigen::VectorXd& params) const;
+  // All model markers (forearm cluster then hand markers) in the lab.
+  Eigen::Matrix3Xd MarkersInLab(const RigidTransform& pose, const Eigen::VectorXd& params) const;
+};
+
+// "" when the layout is usable, else the reason (parents first, indices in
+// range, enough markers, no marker twice in a segment, names unique).
+std::string CheckHandLayout(const HandLayout& layout);
+
+// Fits from model-ordered takes: forearm cluster model (FitRigidModel on the
+// forearm columns), hand markers in the forearm frame per take, frames with
+// every hand marker visible and a valid forearm pose, training-frame
+// selection over the hand markers (min_distance_mm), joint angles (frames
+// with a degenerate segment dropped), FitHandShapeModel, param_scale. Throws InvalidInput on a bad layout (parent
+// after child, too few markers, index out of range), a column mismatch, or
+// too few usable frames. Progress may cancel.
+HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>& takes,
+                       const HandModelOptions& options = {}, Progress* progress = nullptr);
+
+// Per-frame inversion of a model-ordered take (see inversion.h). pose is the
+// forearm cluster pose; params the naH parameters (unscaled, as Predict takes them).
+InversionResult InvertHand(const HandModel& model, const MarkerArray& take,
+                           const InversionOptions& options = {}, Progress* progress = nullptr);
+
+}  // namespace csw
