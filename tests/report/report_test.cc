@@ -25,7 +25,7 @@
 
 // Qt and fontconfig keep process-lifetime caches that LeakSanitizer reports at
 // exit, and the library's QApplication is deliberately never destroyed.
-extern "C" const char *__lsan_default_suppressions() {
+extern "C" const char* __lsan_default_suppressions() {
   return "leak:libfontconfig.so\nleak:libdbus-1.so\nleak:libQt6DBus.so\nleak:"
          "libQt6Gui.so\nleak:libQt6Widgets.so\n"
          "leak:libQt6Core.so\n";
@@ -52,7 +52,7 @@ struct Box {
   int width() const { return right - left + 1; }
   int height() const { return bottom - top + 1; }
 };
-Box Find(const QImage &image, Rgb c, int x0, int x1, int y0, int y1) {
+Box Find(const QImage& image, Rgb c, int x0, int x1, int y0, int y1) {
   Box b;
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x)
@@ -68,7 +68,7 @@ Box Find(const QImage &image, Rgb c, int x0, int x1, int y0, int y1) {
 
 // Runs of columns holding colour c below row y0, left to right: one per bar,
 // with the bar's height in pixels (its tallest column).
-std::vector<int> BarHeights(const QImage &image, Rgb c, int y0) {
+std::vector<int> BarHeights(const QImage& image, Rgb c, int y0) {
   std::vector<int> heights;
   bool in_run = false;
   for (int x = 0; x < image.width(); ++x) {
@@ -89,13 +89,13 @@ std::vector<int> BarHeights(const QImage &image, Rgb c, int y0) {
   return heights;
 }
 
-QImage LoadPng(const fs::path &path) {
+QImage LoadPng(const fs::path& path) {
   QImage image(QString::fromStdString(path.string()));
   return image.convertToFormat(QImage::Format_RGB32);
 }
 
 // The SVG parsed as XML (failing the test on a parse error) and all its text.
-QString SvgText(const fs::path &path) {
+QString SvgText(const fs::path& path) {
   QFile file(QString::fromStdString(path.string()));
   EXPECT_TRUE(file.open(QIODevice::ReadOnly)) << path;
   QXmlStreamReader xml(&file);
@@ -111,9 +111,9 @@ QString SvgText(const fs::path &path) {
   return text;
 }
 
-std::vector<std::string> Listing(const fs::path &dir) {
+std::vector<std::string> Listing(const fs::path& dir) {
   std::vector<std::string> names;
-  for (const auto &e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
   return names;
 }
@@ -122,7 +122,7 @@ template <typename F>
 std::string ThrownMessage(F f) {
   try {
     f();
-  } catch (const std::exception &e) {
+  } catch (const std::exception& e) {
     return e.what();
   }
   return "";
@@ -130,7 +130,7 @@ std::string ThrownMessage(F f) {
 
 TEST(ReportApplication, MadeOnceOffscreenWithoutADisplay) {
   EnsureGuiApplication();
-  QCoreApplication *app = QCoreApplication::instance();
+  QCoreApplication* app = QCoreApplication::instance();
   ASSERT_NE(app, nullptr);
   EnsureGuiApplication();
   EXPECT_EQ(QCoreApplication::instance(), app);
@@ -158,8 +158,7 @@ TEST(ErrorBars, BarHeightsFollowTheMeansInTwoColours) {
   ASSERT_EQ(training.size(), 1u);
   ASSERT_EQ(held_out.size(), 1u);
   EXPECT_GT(held_out[0], 50);
-  // Bars start at 0: heights in the ratio of the means, 3 : 1 (to a pixel or
-  // two).
+  // Bars start at 0: heights in the ratio of the means, 3 : 1 (to a pixel or two).
   EXPECT_NEAR(training[0] / static_cast<double>(held_out[0]), 3.0, 0.08);
   Box t = Find(image, kTrainingColour, 0, image.width(), kHeader, image.height());
   Box h = Find(image, kHeldOutColour, 0, image.width(), kHeader, image.height());
@@ -168,7 +167,7 @@ TEST(ErrorBars, BarHeightsFollowTheMeansInTwoColours) {
   EXPECT_GT(t.count, 2.5 * h.count);
 
   QString svg = SvgText(dir / "e.svg");
-  for (const char *s : {"Face model", "take_one", "take_two", "training", "held out", "mean absolute error (mm)",
+  for (const char* s : {"Face model", "take_one", "take_two", "training", "held out", "mean absolute error (mm)",
                         "target 2 mm", "maximum"})
     EXPECT_TRUE(svg.contains(QString::fromUtf8(s))) << s;
   QFile pdf(QString::fromStdString((dir / "e.pdf").string()));
@@ -184,8 +183,7 @@ TEST(ErrorBars, ManyUtterancesAreEachABarInOrder) {
     std::snprintf(label, sizeof label, "sentence_%03d", i);
     bars.push_back({label, 0.5 + 0.1 * i, 0.05, 0.6 + 0.1 * i, i >= 10});
   }
-  // One maximum far above the rest is drawn at the top, not allowed to squash
-  // the bars.
+  // One maximum far above the rest is drawn at the top, not allowed to squash the bars.
   bars[3].max = 40;
   SaveErrorBars((dir / "many.png").string(), "Hand model", bars, 1.0);
   SaveErrorBars((dir / "many.svg").string(), "Hand model", bars, 1.0);
@@ -198,8 +196,7 @@ TEST(ErrorBars, ManyUtterancesAreEachABarInOrder) {
   std::vector<int> all = training;
   all.insert(all.end(), held_out.begin(), held_out.end());
   for (size_t i = 1; i < all.size(); ++i) EXPECT_GT(all[i], all[i - 1]) << i;
-  // Heights are linear in the mean: (3.4 − 0.5) / (1.4 − 0.5) between the last
-  // and the 10th.
+  // Heights are linear in the mean: (3.4 − 0.5) / (1.4 − 0.5) between the last and the 10th.
   EXPECT_NEAR((all[29] - all[0]) / static_cast<double>(all[9] - all[0]), 29.0 / 9.0, 0.1);
   QString svg = SvgText(dir / "many.svg");
   EXPECT_TRUE(svg.contains("sentence_000"));
@@ -220,7 +217,7 @@ TEST(VarianceExplained, BarsInProportionAndTheCumulativeCurve) {
   EXPECT_NEAR(heights[0] / static_cast<double>(heights[2]), 0.5 / 0.15, 0.08);
   EXPECT_NEAR(heights[0] / static_cast<double>(heights[3]), 10.0, 0.6);
   QString svg = SvgText(dir / "v.svg");
-  for (const char *s : {"Face parameters", "jaw", "lips rounding", "throat", "variance explained (%)",
+  for (const char* s : {"Face parameters", "jaw", "lips rounding", "throat", "variance explained (%)",
                         "cumulative variance explained (%)", "50.0", "15.0"})
     EXPECT_TRUE(svg.contains(QString::fromUtf8(s))) << s;
 }
@@ -272,8 +269,7 @@ TEST(ParameterEffects, ExtremesMoveWhereTheEffectPutsThemAtEqualAspect) {
   ASSERT_GT(low.count, 100);
   ASSERT_GT(high.count, 100);
   // Horizontal sides of all three squares are visible: the low and high boxes
-  // are 40 mm squares (equal aspect), 20 mm apart; the px per mm from the
-  // width.
+  // are 40 mm squares (equal aspect), 20 mm apart; the px per mm from the width.
   double px_per_mm = (high.width() - 5) / 40.0;
   EXPECT_GT(px_per_mm, 2.0);
   EXPECT_NEAR(high.height(), high.width(), 2);
@@ -290,7 +286,7 @@ TEST(ParameterEffects, ExtremesMoveWhereTheEffectPutsThemAtEqualAspect) {
   EXPECT_NEAR(high2.top, low2.top, 1);
 
   QString svg = SvgText(dir / "p.svg");
-  for (const char *s :
+  for (const char* s :
        {"Face model: parameter effects", "jaw opening", "lip spreading", "x (mm)", "z (mm)", "neutral (mean)", "+2 sd"})
     EXPECT_TRUE(svg.contains(QString::fromUtf8(s))) << s;
 }
@@ -308,8 +304,7 @@ TEST(ParameterEffects, MissingMarkersAreLeftOutAndBadInputRefused) {
   QImage image = LoadPng(dir / "p.png");
   ASSERT_EQ(image.size(), QSize(width, height));
   // Four corner dots, one stick (the bottom side; the stick to the missing
-  // marker is not drawn) and no dot in the middle: between the corners only one
-  // horizontal line is red.
+  // marker is not drawn) and no dot in the middle: between the corners only one horizontal line is red.
   Box high = Find(image, kHighColour, 0, width, kHeader, height);
   ASSERT_GT(high.count, 50);
   EXPECT_NEAR(high.height(), high.width(), 2);
@@ -332,7 +327,7 @@ TEST(ParameterEffects, MissingMarkersAreLeftOutAndBadInputRefused) {
 TEST(FigureFiles, UnknownExtensionIsInvalidInputNamingThePath) {
   testing::TempDir dir;
   std::vector<ErrorBar> bars = {{"u", 1, 0.1, 1.2, false}};
-  for (const char *name : {"e.bmp", "e.txt", "e"}) {
+  for (const char* name : {"e.bmp", "e.txt", "e"}) {
     std::string path = (dir / name).string();
     EXPECT_THROW(SaveErrorBars(path, "t", bars, 0), InvalidInput);
     std::string message = ThrownMessage([&] { SaveErrorBars(path, "t", bars, 0); });
@@ -348,13 +343,12 @@ TEST(FigureFiles, UnwritablePathIsIoErrorNamingThePath) {
   testing::TempDir dir;
   std::ofstream(dir / "plain_file") << "not a folder";
   std::vector<ErrorBar> bars = {{"u", 1, 0.1, 1.2, false}};
-  for (const fs::path &path : {dir / "plain_file" / "e.png", dir / "no_such_folder" / "e.svg"}) {
+  for (const fs::path& path : {dir / "plain_file" / "e.png", dir / "no_such_folder" / "e.svg"}) {
     std::string message = ThrownMessage([&] { SaveErrorBars(path.string(), "t", bars, 0); });
     EXPECT_NE(message.find(path.string()), std::string::npos) << message;
     EXPECT_THROW(SaveErrorBars(path.string(), "t", bars, 0), IoError);
   }
-  // A folder where the file should go: written beside it, then the rename
-  // fails.
+  // A folder where the file should go: written beside it, then the rename fails.
   fs::create_directory(dir / "taken.png");
   std::ofstream(dir / "taken.png" / "inside") << "x";
   EXPECT_THROW(SaveErrorBars((dir / "taken.png").string(), "t", bars, 0), IoError);

@@ -1,6 +1,7 @@
 #pragma once
 // Figures: any plot (or the 3D view) saved as PNG, SVG or PDF, chosen by the
-// file's extension. Throws csw::IoError naming the file when writing fails and
+// file's extension (written by workbench/report/figure_file.h: under a temporary
+// name, renamed into place). Throws csw::IoError naming the file when writing fails and
 // csw::InvalidInput for an unknown extension.
 #include <QString>
 #include <functional>

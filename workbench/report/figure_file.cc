@@ -20,13 +20,13 @@ namespace csw::report {
 
 namespace {
 
-std::string Std(const QString &s) { return s.toStdString(); }
+std::string Std(const QString& s) { return s.toStdString(); }
 
 // A file next to the destination, written first and renamed over it at the end;
 // removed again when anything fails.
 class PartFile {
  public:
-  explicit PartFile(const QString &path) : path_(path) {
+  explicit PartFile(const QString& path) : path_(path) {
     QFileInfo info(path);
     QFileInfo dir(info.absolutePath());
     if (!dir.exists())
@@ -36,8 +36,7 @@ class PartFile {
     part_ = info.absolutePath() + "/." + info.completeBaseName() + ".part" + QString::number(::getpid()) + "-" +
             QString::number(counter++) + "." + info.suffix();
     // Opened once here so that an unwritable folder is reported with the
-    // system's reason; the file gets the usual permissions (umask), unlike a
-    // QTemporaryFile.
+    // system's reason; the file gets the usual permissions (umask), unlike a QTemporaryFile.
     QFile probe(part_);
     if (!probe.open(QIODevice::WriteOnly | QIODevice::Truncate))
       throw IoError(Std(path), "cannot write the figure: " + Std(probe.errorString()));
@@ -49,10 +48,10 @@ class PartFile {
       std::filesystem::remove(part_.toStdString(), ec);
     }
   }
-  PartFile(const PartFile &) = delete;
-  PartFile &operator=(const PartFile &) = delete;
+  PartFile(const PartFile&) = delete;
+  PartFile& operator=(const PartFile&) = delete;
 
-  const QString &name() const { return part_; }
+  const QString& name() const { return part_; }
 
   // ok: whether the writer reported success.
   void Commit(bool ok) {
@@ -73,14 +72,14 @@ class PartFile {
 
 QStringList FigureFormats() { return {"png", "svg", "pdf"}; }
 
-QString FigureFormat(const QString &path) {
+QString FigureFormat(const QString& path) {
   QString ext = QFileInfo(path).suffix().toLower();
   if (!FigureFormats().contains(ext))
     throw InvalidInput(Std(path) + ": unknown figure format (use .png, .svg or .pdf)");
   return ext;
 }
 
-void SavePlot(QCustomPlot &plot, const QString &path, int width, int height) {
+void SavePlot(QCustomPlot& plot, const QString& path, int width, int height) {
   QString ext = FigureFormat(path);
   if (width <= 0) width = plot.width();
   if (height <= 0) height = plot.height();
@@ -109,7 +108,7 @@ void SavePlot(QCustomPlot &plot, const QString &path, int width, int height) {
   part.Commit(ok);
 }
 
-void SavePainted(const std::function<void(QPainter &, QSize)> &render, QSize size, const QString &path) {
+void SavePainted(const std::function<void(QPainter&, QSize)>& render, QSize size, const QString& path) {
   QString ext = FigureFormat(path);
   PartFile part(path);
   bool ok = false;
@@ -141,8 +140,7 @@ void SavePainted(const std::function<void(QPainter &, QSize)> &render, QSize siz
     QPainter painter;
     ok = painter.begin(&pdf);
     if (ok) {
-      // The page is in points at 96 dpi device pixels: scale so the drawing
-      // fills it.
+      // The page is in points at 96 dpi device pixels: scale so the drawing fills it.
       double sx = pdf.width() / static_cast<double>(size.width());
       double sy = pdf.height() / static_cast<double>(size.height());
       painter.scale(sx, sy);

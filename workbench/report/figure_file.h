@@ -19,15 +19,14 @@ namespace csw::report {
 // The extensions understood, lower case: "png", "svg", "pdf".
 QStringList FigureFormats();
 
-// The lower-case extension of path; InvalidInput when it is not one of
-// FigureFormats().
-QString FigureFormat(const QString &path);
+// The lower-case extension of path; InvalidInput when it is not one of FigureFormats().
+QString FigureFormat(const QString& path);
 
 // Saves a QCustomPlot laid out at width × height pixels (0 = its current size).
-void SavePlot(QCustomPlot &plot, const QString &path, int width = 0, int height = 0);
+void SavePlot(QCustomPlot& plot, const QString& path, int width = 0, int height = 0);
 
 // Saves anything that renders itself with a QPainter into a size.width ×
 // size.height rectangle (white background for PNG).
-void SavePainted(const std::function<void(QPainter &, QSize)> &render, QSize size, const QString &path);
+void SavePainted(const std::function<void(QPainter&, QSize)>& render, QSize size, const QString& path);
 
 }  // namespace csw::report

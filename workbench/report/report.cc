@@ -18,7 +18,7 @@ namespace csw::report {
 namespace {
 
 QColor Colour(Rgb c) { return QColor(c.r, c.g, c.b); }
-QString Q(const std::string &s) { return QString::fromStdString(s); }
+QString Q(const std::string& s) { return QString::fromStdString(s); }
 
 // A QCustomPlot drawn only into files: laid out at the figure's size so that
 // ranges depending on pixel sizes (equal aspect) can be set before saving.
@@ -35,7 +35,7 @@ class Canvas : public QCustomPlot {
     setViewport(QRect(0, 0, width_, height_));
     updateLayout();
   }
-  void Save(const std::string &path) { SavePlot(*this, Q(path), width_, height_); }
+  void Save(const std::string& path) { SavePlot(*this, Q(path), width_, height_); }
 
  private:
   int width_, height_;
@@ -49,14 +49,13 @@ QFont Font(double points, bool bold = false) {
 }
 
 // Row 0: the title; row 1: the legend, its items side by side; below: the rest.
-void AddHeader(QCustomPlot &plot, const std::string &title, QCPLegend *legend) {
+void AddHeader(QCustomPlot& plot, const std::string& title, QCPLegend* legend) {
   plot.plotLayout()->insertRow(0);
   plot.plotLayout()->addElement(0, 0, new QCPTextElement(&plot, Q(title), Font(14, true)));
   if (legend == nullptr) return;
   if (legend->layout() != nullptr) legend->layout()->take(legend);
-  // Centred at its natural width: empty elements either side take the rest of
-  // the row.
-  auto *row = new QCPLayoutGrid;
+  // Centred at its natural width: empty elements either side take the rest of the row.
+  auto* row = new QCPLayoutGrid;
   plot.plotLayout()->insertRow(1);
   plot.plotLayout()->addElement(1, 0, row);
   plot.plotLayout()->setRowStretchFactor(1, 0.001);
@@ -73,8 +72,8 @@ void AddHeader(QCustomPlot &plot, const std::string &title, QCPLegend *legend) {
   legend->setMargins(QMargins(6, 0, 6, 0));
 }
 
-void StyleAxes(QCPAxisRect *rect) {
-  for (QCPAxis *axis : rect->axes()) {
+void StyleAxes(QCPAxisRect* rect) {
+  for (QCPAxis* axis : rect->axes()) {
     axis->setTickLabelFont(Font(9));
     axis->setLabelFont(Font(10));
     axis->grid()->setPen(QPen(QColor(225, 225, 225), 1, Qt::SolidLine));
@@ -83,12 +82,11 @@ void StyleAxes(QCPAxisRect *rect) {
 }
 
 // Category labels under bars at 0, 1, ... n−1: horizontal when they fit,
-// rotated when not, and only every k-th one when even rotated ones would
-// overlap.
-void SetCategoryTicks(QCPAxis *axis, const std::vector<QString> &labels, int available_px) {
+// rotated when not, and only every k-th one when even rotated ones would overlap.
+void SetCategoryTicks(QCPAxis* axis, const std::vector<QString>& labels, int available_px) {
   QFontMetrics fm(axis->tickLabelFont());
   int widest = 0;
-  for (const QString &l : labels) widest = std::max(widest, fm.horizontalAdvance(l));
+  for (const QString& l : labels) widest = std::max(widest, fm.horizontalAdvance(l));
   int n = static_cast<int>(labels.size());
   double slot = available_px / static_cast<double>(std::max(n, 1));
   int step = 1;
@@ -107,11 +105,11 @@ void SetCategoryTicks(QCPAxis *axis, const std::vector<QString> &labels, int ava
   axis->setRange(-0.6, n - 0.4);
 }
 
-QString Elide(const std::string &s, const QFont &font) {
+QString Elide(const std::string& s, const QFont& font) {
   return QFontMetrics(font).elidedText(Q(s), Qt::ElideMiddle, 180);
 }
 
-void CheckFinite(double v, bool allow_negative, const std::string &what) {
+void CheckFinite(double v, bool allow_negative, const std::string& what) {
   if (!std::isfinite(v) || (!allow_negative && v < 0)) throw InvalidInput(what);
 }
 
@@ -120,8 +118,8 @@ void CheckFinite(double v, bool allow_negative, const std::string &what) {
 void EnsureGuiApplication() {
   static std::mutex mutex;
   std::lock_guard lock(mutex);
-  if (QCoreApplication *core = QCoreApplication::instance()) {
-    if (qobject_cast<QApplication *>(core) == nullptr)
+  if (QCoreApplication* core = QCoreApplication::instance()) {
+    if (qobject_cast<QApplication*>(core) == nullptr)
       throw InvalidInput(
           "figures need a QApplication, but the program made a "
           "QCoreApplication");
@@ -135,17 +133,17 @@ void EnsureGuiApplication() {
   if (platform.isEmpty() || (needs_display && !display)) qputenv("QT_QPA_PLATFORM", "offscreen");
   static int argc = 1;
   static char name[] = "csw";
-  static char *argv[] = {name, nullptr};
+  static char* argv[] = {name, nullptr};
   // Never destroyed: Qt does not support a QApplication outliving main(), and
   // the process ends right after the CLI's last figure anyway.
   new QApplication(argc, argv);
 }
 
-void SaveErrorBars(const std::string &path, const std::string &title, const std::vector<ErrorBar> &bars,
+void SaveErrorBars(const std::string& path, const std::string& title, const std::vector<ErrorBar>& bars,
                    double target_mm) {
   FigureFormat(Q(path));
   if (bars.empty()) throw InvalidInput(path + ": no utterances to plot");
-  for (const ErrorBar &b : bars) {
+  for (const ErrorBar& b : bars) {
     std::string what = path + ": utterance " + b.label + ": error must be a finite number >= 0";
     CheckFinite(b.mean, false, what);
     CheckFinite(b.sd, false, what);
@@ -156,14 +154,14 @@ void SaveErrorBars(const std::string &path, const std::string &title, const std:
 
   Canvas plot(kFigureWidth, kFigureHeight);
   int n = static_cast<int>(bars.size());
-  QCPAxis *x = plot.xAxis;
-  QCPAxis *y = plot.yAxis;
+  QCPAxis* x = plot.xAxis;
+  QCPAxis* y = plot.yAxis;
   StyleAxes(plot.axisRect());
 
   // Scale: every mean + sd and the target; maxima too unless far above those.
   double base = target_mm;
   double top_max = 0;
-  for (const ErrorBar &b : bars) {
+  for (const ErrorBar& b : bars) {
     base = std::max(base, b.mean + b.sd);
     top_max = std::max(top_max, b.max);
   }
@@ -172,17 +170,16 @@ void SaveErrorBars(const std::string &path, const std::string &title, const std:
 
   double bar_width = 0.7;
   double bar_px = (kFigureWidth - 120) * bar_width / n;
-  auto make_bars = [&](const QString &name, Rgb c) {
-    auto *b = new QCPBars(x, y);
+  auto make_bars = [&](const QString& name, Rgb c) {
+    auto* b = new QCPBars(x, y);
     b->setName(name);
     b->setWidth(bar_width);
     b->setBrush(Colour(c));
-    // Outlines only while bars are wide enough for them not to blacken the
-    // figure.
+    // Outlines only while bars are wide enough for them not to blacken the figure.
     b->setPen(bar_px >= 10 ? QPen(Colour(c).darker(130), 1) : QPen(Qt::NoPen));
     b->setAntialiased(false);
     b->setAntialiasedFill(false);
-    auto *e = new QCPErrorBars(x, y);
+    auto* e = new QCPErrorBars(x, y);
     e->removeFromLegend();
     e->setDataPlottable(b);
     e->setPen(QPen(QColor(30, 30, 30), 1.2));
@@ -191,11 +188,11 @@ void SaveErrorBars(const std::string &path, const std::string &title, const std:
   };
   auto [train, train_err] = make_bars(QStringLiteral("training"), kTrainingColour);
   auto [held, held_err] = make_bars(QStringLiteral("held out"), kHeldOutColour);
-  auto *maxima = new QCPGraph(x, y);
+  auto* maxima = new QCPGraph(x, y);
   maxima->setName(QStringLiteral("maximum"));
   maxima->setLineStyle(QCPGraph::lsNone);
   maxima->setScatterStyle(QCPScatterStyle(QCPScatterStyle::ssCross, QPen(QColor(70, 70, 70), 1.3), Qt::NoBrush, 7));
-  auto *off_scale = new QCPGraph(x, y);
+  auto* off_scale = new QCPGraph(x, y);
   off_scale->setName(QStringLiteral("maximum off the scale"));
   off_scale->setLineStyle(QCPGraph::lsNone);
   off_scale->setScatterStyle(
@@ -204,7 +201,7 @@ void SaveErrorBars(const std::string &path, const std::string &title, const std:
   QVector<double> train_minus, train_plus, held_minus, held_plus;
   std::vector<QString> labels;
   for (int i = 0; i < n; ++i) {
-    const ErrorBar &b = bars[static_cast<size_t>(i)];
+    const ErrorBar& b = bars[static_cast<size_t>(i)];
     (b.held_out ? held : train)->addData(i, b.mean);
     // Errors are not negative: the lower whisker stops at 0.
     (b.held_out ? held_minus : train_minus).push_back(std::min(b.sd, b.mean));
@@ -226,7 +223,7 @@ void SaveErrorBars(const std::string &path, const std::string &title, const std:
   if (off_scale->data()->isEmpty()) off_scale->removeFromLegend();
 
   if (target_mm > 0) {
-    auto *target = new QCPGraph(x, y);
+    auto* target = new QCPGraph(x, y);
     target->setName(QStringLiteral("target %1 mm").arg(target_mm, 0, 'g', 3));
     target->setPen(QPen(QColor(20, 20, 20), 1.5, Qt::DashLine));
     target->addData(-0.6, target_mm);
@@ -240,8 +237,8 @@ void SaveErrorBars(const std::string &path, const std::string &title, const std:
   plot.Save(path);
 }
 
-void SaveVarianceExplained(const std::string &path, const std::string &title, const std::vector<std::string> &names,
-                           const std::vector<double> &fractions) {
+void SaveVarianceExplained(const std::string& path, const std::string& title, const std::vector<std::string>& names,
+                           const std::vector<double>& fractions) {
   FigureFormat(Q(path));
   if (fractions.empty()) throw InvalidInput(path + ": no parameters to plot");
   if (names.size() != fractions.size())
@@ -254,21 +251,21 @@ void SaveVarianceExplained(const std::string &path, const std::string &title, co
 
   Canvas plot(kFigureWidth, kFigureHeight);
   int n = static_cast<int>(fractions.size());
-  QCPAxis *x = plot.xAxis;
-  QCPAxis *y = plot.yAxis;
-  QCPAxis *y2 = plot.yAxis2;
+  QCPAxis* x = plot.xAxis;
+  QCPAxis* y = plot.yAxis;
+  QCPAxis* y2 = plot.yAxis2;
   y2->setVisible(true);
   StyleAxes(plot.axisRect());
   y2->grid()->setVisible(false);
 
-  auto *bars = new QCPBars(x, y);
+  auto* bars = new QCPBars(x, y);
   bars->setName(QStringLiteral("each parameter (left axis)"));
   bars->setWidth(0.7);
   bars->setBrush(Colour(kTrainingColour));
   bars->setPen(QPen(Colour(kTrainingColour).darker(130), 1));
   bars->setAntialiased(false);
   bars->setAntialiasedFill(false);
-  auto *cumulative = new QCPGraph(x, y2);
+  auto* cumulative = new QCPGraph(x, y2);
   cumulative->setName(QStringLiteral("cumulative (right axis)"));
   cumulative->setPen(QPen(QColor(40, 40, 40), 2));
   cumulative->setScatterStyle(
@@ -288,7 +285,7 @@ void SaveVarianceExplained(const std::string &path, const std::string &title, co
   // Values over the bars while there is room for them.
   if (n <= 24) {
     for (int i = 0; i < n; ++i) {
-      auto *text = new QCPItemText(&plot);
+      auto* text = new QCPItemText(&plot);
       text->setClipToAxisRect(false);
       text->position->setAxes(x, y);
       text->position->setCoords(i, fractions[static_cast<size_t>(i)] * 100);
@@ -315,25 +312,25 @@ std::pair<int, int> ParameterEffectsSize(int parameters) {
   return {std::max(600, cols * 300), 90 + rows * 360};
 }
 
-void SaveParameterEffects(const std::string &path, const std::string &title, const Eigen::Matrix3Xd &neutral,
-                          const std::vector<ParameterEffect> &effects, const std::vector<std::pair<int, int>> &sticks) {
+void SaveParameterEffects(const std::string& path, const std::string& title, const Eigen::Matrix3Xd& neutral,
+                          const std::vector<ParameterEffect>& effects, const std::vector<std::pair<int, int>>& sticks) {
   FigureFormat(Q(path));
   if (effects.empty()) throw InvalidInput(path + ": no parameters to plot");
   const Eigen::Index m = neutral.cols();
   if (m == 0) throw InvalidInput(path + ": no markers to plot");
-  for (const ParameterEffect &e : effects)
+  for (const ParameterEffect& e : effects)
     if (e.low.cols() != m || e.high.cols() != m)
       throw InvalidInput(path + ": parameter " + e.name + ": " + std::to_string(e.low.cols()) + " and " +
                          std::to_string(e.high.cols()) + " markers at its extremes, the neutral shape has " +
                          std::to_string(m));
-  for (const auto &[a, b] : sticks)
+  for (const auto& [a, b] : sticks)
     if (a < 0 || b < 0 || a >= m || b >= m)
       throw InvalidInput(path + ": stick " + std::to_string(a) + "-" + std::to_string(b) +
                          " names a marker outside 0.." + std::to_string(m - 1));
 
   // One scale for every panel: the box around every finite marker (x, z).
   double x0 = INFINITY, x1 = -INFINITY, z0 = INFINITY, z1 = -INFINITY;
-  auto extend = [&](const Eigen::Matrix3Xd &s) {
+  auto extend = [&](const Eigen::Matrix3Xd& s) {
     for (Eigen::Index k = 0; k < m; ++k)
       if (s.col(k).allFinite()) {
         x0 = std::min(x0, s(0, k));
@@ -343,7 +340,7 @@ void SaveParameterEffects(const std::string &path, const std::string &title, con
       }
   };
   extend(neutral);
-  for (const ParameterEffect &e : effects) {
+  for (const ParameterEffect& e : effects) {
     extend(e.low);
     extend(e.high);
   }
@@ -358,11 +355,11 @@ void SaveParameterEffects(const std::string &path, const std::string &title, con
   auto [width, height] = ParameterEffectsSize(n);
   int cols = std::clamp(n, 1, 4);
   Canvas plot(width, height);
-  QCPLegend *legend = plot.legend;
+  QCPLegend* legend = plot.legend;
   plot.axisRect()->insetLayout()->take(legend);
   plot.plotLayout()->clear();
   plot.setAutoAddPlottableToLegend(false);
-  auto *grid = new QCPLayoutGrid;
+  auto* grid = new QCPLayoutGrid;
   plot.plotLayout()->addElement(0, 0, grid);
   AddHeader(plot, title, legend);
 
@@ -376,49 +373,47 @@ void SaveParameterEffects(const std::string &path, const std::string &title, con
   const Style styles[3] = {{QStringLiteral("low (\u22122 sd)"), Colour(kLowColour), 2.0},
                            {QStringLiteral("high (+2 sd)"), Colour(kHighColour), 2.0},
                            {QStringLiteral("neutral (mean)"), Colour(kNeutralColour), 2.0}};
-  std::vector<QCPAxisRect *> rects;
+  std::vector<QCPAxisRect*> rects;
   for (int p = 0; p < n; ++p) {
-    const ParameterEffect &e = effects[static_cast<size_t>(p)];
-    auto *panel = new QCPLayoutGrid;
+    const ParameterEffect& e = effects[static_cast<size_t>(p)];
+    auto* panel = new QCPLayoutGrid;
     grid->addElement(p / cols, p % cols, panel);
     panel->addElement(0, 0, new QCPTextElement(&plot, Q(e.name), Font(11, true)));
-    auto *rect = new QCPAxisRect(&plot);
+    auto* rect = new QCPAxisRect(&plot);
     panel->addElement(1, 0, rect);
     panel->setRowStretchFactor(0, 0.001);
     panel->setRowSpacing(0);
-    // Fixed margins: every panel's plotting area has the same size whatever its
-    // tick labels.
+    // Fixed margins: every panel's plotting area has the same size whatever its tick labels.
     rect->setAutoMargins(QCP::msNone);
     rect->setMargins(QMargins(62, 4, 14, 40));
     StyleAxes(rect);
-    QCPAxis *ax = rect->axis(QCPAxis::atBottom);
-    QCPAxis *az = rect->axis(QCPAxis::atLeft);
+    QCPAxis* ax = rect->axis(QCPAxis::atBottom);
+    QCPAxis* az = rect->axis(QCPAxis::atLeft);
     az->setLabelPadding(2);
     if (p % cols == 0) az->setLabel(QStringLiteral("z (mm)"));
     if (p + cols >= n) ax->setLabel(QStringLiteral("x (mm)"));
     rects.push_back(rect);
 
-    const Eigen::Matrix3Xd *shapes[3] = {&e.low, &e.high, &neutral};
+    const Eigen::Matrix3Xd* shapes[3] = {&e.low, &e.high, &neutral};
     for (int s = 0; s < 3; ++s) {
-      const Eigen::Matrix3Xd &shape = *shapes[s];
+      const Eigen::Matrix3Xd& shape = *shapes[s];
       QPen pen(styles[s].colour, styles[s].width);
       QCPScatterStyle dot(QCPScatterStyle::ssDisc, styles[s].colour, 5);
       // Sticks: one curve, broken by NaN between segments (its ends get dots
-      // too, which coincide with the markers' dots; the legend shows a stick
-      // with a dot).
-      auto *lines = new QCPCurve(ax, az);
+      // too, which coincide with the markers' dots; the legend shows a stick with a dot).
+      auto* lines = new QCPCurve(ax, az);
       lines->setName(styles[s].name);
       lines->setPen(pen);
       lines->setScatterStyle(dot);
       QVector<double> t, xs, zs;
-      for (const auto &[a, b] : sticks) {
+      for (const auto& [a, b] : sticks) {
         if (!shape.col(a).allFinite() || !shape.col(b).allFinite()) continue;
         for (double v : {shape(0, a), shape(0, b), static_cast<double>(NAN)}) xs.push_back(v);
         for (double v : {shape(2, a), shape(2, b), static_cast<double>(NAN)}) zs.push_back(v);
       }
       for (int i = 0; i < xs.size(); ++i) t.push_back(i);
       lines->setData(t, xs, zs);
-      auto *dots = new QCPCurve(ax, az);
+      auto* dots = new QCPCurve(ax, az);
       dots->setPen(pen);
       dots->setLineStyle(QCPCurve::lsNone);
       dots->setScatterStyle(dot);
@@ -437,18 +432,17 @@ void SaveParameterEffects(const std::string &path, const std::string &title, con
   }
   // Legend in the order neutral, low, high.
   if (legend->itemCount() == 3) {
-    QCPAbstractLegendItem *neutral_item = legend->item(2);
+    QCPAbstractLegendItem* neutral_item = legend->item(2);
     legend->take(neutral_item);
     legend->simplify();
     legend->insertColumn(0);
     legend->addElement(0, 0, neutral_item);
   }
-  // Equal aspect: the same millimetres per pixel across and up, and in every
-  // panel.
+  // Equal aspect: the same millimetres per pixel across and up, and in every panel.
   plot.Layout();
   QRect area = rects.front()->rect();
   double mm_per_px = std::max(xspan / std::max(area.width(), 1), zspan / std::max(area.height(), 1));
-  for (QCPAxisRect *rect : rects) {
+  for (QCPAxisRect* rect : rects) {
     rect->axis(QCPAxis::atBottom)->setRange(xc - area.width() * mm_per_px / 2, xc + area.width() * mm_per_px / 2);
     rect->axis(QCPAxis::atLeft)->setRange(zc - area.height() * mm_per_px / 2, zc + area.height() * mm_per_px / 2);
   }

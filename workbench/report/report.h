@@ -49,14 +49,14 @@ struct ErrorBar {
 // colours with a legend, sd whiskers, the maxima, and a dashed line at
 // target_mm (0 = none). Labels are rotated when there are many and thinned when
 // they would overlap. InvalidInput: no bars, or a negative / non-finite number.
-void SaveErrorBars(const std::string &path, const std::string &title, const std::vector<ErrorBar> &bars,
+void SaveErrorBars(const std::string& path, const std::string& title, const std::vector<ErrorBar>& bars,
                    double target_mm);
 
 // Bars: the fraction of variance each parameter explains (in %, left axis);
 // line: the cumulative fraction (in %, right axis). fractions are 0..1.
 // InvalidInput: sizes differ, empty, or a fraction outside [0, 1].
-void SaveVarianceExplained(const std::string &path, const std::string &title, const std::vector<std::string> &names,
-                           const std::vector<double> &fractions);
+void SaveVarianceExplained(const std::string& path, const std::string& title, const std::vector<std::string>& names,
+                           const std::vector<double>& fractions);
 
 // A parameter's effect: all markers (model frame, mm) with that parameter at
 // its low (−2 sd) and high (+2 sd) value, every other parameter at 0.
@@ -65,15 +65,15 @@ struct ParameterEffect {
   Eigen::Matrix3Xd low, high;
 };
 
-// A grid with one panel per parameter, each showing the neutral shape in grey
-// and the low (blue) and high (red) extremes over it: markers as dots, sticks
-// as lines (pairs of marker indices). Front view: the model frame's x to the
+// A grid with one panel per parameter, each showing the low (blue) and high
+// (red) extremes with the neutral shape (grey) drawn over them, so that what a
+// parameter leaves in place shows grey: markers as dots, sticks as lines
+// (pairs of marker indices). Front view: the model frame's x to the
 // right and z up, equal aspect and the same scale in every panel. Markers with
 // a NaN coordinate are left out with their sticks. InvalidInput: no effects,
-// matrices whose column counts differ from neutral's, a stick index out of
-// range.
-void SaveParameterEffects(const std::string &path, const std::string &title, const Eigen::Matrix3Xd &neutral,
-                          const std::vector<ParameterEffect> &effects, const std::vector<std::pair<int, int>> &sticks);
+// matrices whose column counts differ from neutral's, a stick index out of range.
+void SaveParameterEffects(const std::string& path, const std::string& title, const Eigen::Matrix3Xd& neutral,
+                          const std::vector<ParameterEffect>& effects, const std::vector<std::pair<int, int>>& sticks);
 
 // The PNG size SaveParameterEffects writes for `parameters` panels: up to four
 // panels of 300 × 360 pixels per row, at least 600 pixels wide, plus a header.
