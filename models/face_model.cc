@@ -363,11 +363,20 @@ struct Prepared {
   Eigen::VectorXd rest_mean;      // 3ns: (1 − w)(R̄ m_j + t̄)
   Eigen::MatrixXd rest_loadings;  // 3ns × np: (1 − w) R̄ L_j
   RigidTransform rest;
+  int num_rigid_shape = 0;        // leading shape markers with w = 1 (the face)
 };
 
 // Per-frame problem for ceres::TinySolver: x = (δ, τ, p), R = exp(δ) R0,
 // t = t0 + τ. Residuals: every head marker (3), every shape marker (3), the
 // prior (np); hidden markers give zero rows so the size never changes.
+//
+// Markers that move rigidly with the head (the cluster and the face, w = 1)
+// have their residual expressed in the head frame, Rᵀ(R x + t − obs) =
+// x − Rᵀ(obs − t): the same length, so the same cost, but its derivative with
+// respect to the shape parameters is the constant loading block, and with
+// respect to δ it is −[y]× R0ᵀ J_l(δ)ᵀ with y = Rᵀ(obs − t) (exact: J_l is
+// the left Jacobian of SO(3)). Throat markers (w < 1) keep the lab residual
+// w (R x + t) + (1 − w)(R̄ x + t̄) − obs.
 struct FrameProblem {
   using Scalar = double;
   enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = Eigen::Dynamic };
@@ -376,7 +385,6 @@ struct FrameProblem {
   double prior = 0;
   Eigen::Matrix3d r0 = Eigen::Matrix3d::Identity();
   Eigen::Vector3d t0 = Eigen::Vector3d::Zero();
-  Eigen::Matrix3Xd ref0;            // R0 · reference
   Eigen::Matrix3Xd obs;             // 3 × (nh + ns), lab
   std::vector<uint8_t> visible;     // nh + ns
   mutable Eigen::VectorXd x_head;   // 3ns scratch
@@ -386,7 +394,7 @@ struct FrameProblem {
   int NumParameters() const { return 6 + m->np; }
 
   bool operator()(const double* params, double* residuals, double* jacobian) const {
-    const int nh = m->nh, ns = m->ns, np = m->np;
+    const int nh = m->nh, ns = m->ns, np = m->np, nf = m->num_rigid_shape;
     const int nr = NumResiduals();
     const Eigen::Vector3d d(params[0], params[1], params[2]);
     const Eigen::Vector3d t = t0 + Eigen::Vector3d(params[3], params[4], params[5]);
@@ -394,26 +402,49 @@ struct FrameProblem {
     Eigen::Matrix3d e, jl;
     ExpAndLeftJacobian(d, &e, jacobian ? &jl : nullptr);
     const Eigen::Matrix3d r = e * r0;
+    const Eigen::Matrix3d rt = r.transpose();
     Eigen::Map<Eigen::VectorXd> res(residuals, nr);
     Eigen::Map<Eigen::MatrixXd> jac(jacobian, jacobian ? nr : 0, jacobian ? 6 + np : 0);
-    if (jacobian) jac.setZero();
-    for (int k = 0; k < nh; ++k) {
-      if (!visible[static_cast<size_t>(k)]) {
-        res.segment<3>(3 * k).setZero();
-        continue;
-      }
-      const Eigen::Vector3d y = e * ref0.col(k);
-      res.segment<3>(3 * k) = y + t - obs.col(k);
-      if (jacobian) {
-        jac.block<3, 3>(3 * k, 0) = -Hat(y) * jl;
-        jac.block<3, 3>(3 * k, 3).setIdentity();
-      }
+    Eigen::Matrix3d k;  // R0ᵀ J_lᵀ
+    if (jacobian) {
+      jac.setZero();
+      k.noalias() = r0.transpose() * jl.transpose();
+      // Face rows: constant loading blocks (hidden rows are cleared below).
+      jac.block(3 * nh, 6, 3 * nf, np) = m->loadings.topRows(3 * nf);
     }
     x_head.noalias() = m->loadings * p;
     x_head += m->mean;
-    x_rest.noalias() = m->rest_loadings * p;
-    x_rest += m->rest_mean;
-    for (int j = 0; j < ns; ++j) {
+    // Head cluster and face markers, head frame.
+    auto rigid_row = [&](int row, const Eigen::Vector3d& model_point, int column) {
+      const Eigen::Vector3d y = rt * (obs.col(column) - t);
+      res.segment<3>(row) = model_point - y;
+      if (jacobian) {
+        for (int c = 0; c < 3; ++c) jac.block<3, 1>(row, c) = -y.cross(k.col(c));
+        jac.block<3, 3>(row, 3) = rt;
+      }
+    };
+    for (int c = 0; c < nh; ++c) {
+      if (visible[static_cast<size_t>(c)]) {
+        rigid_row(3 * c, m->reference.col(c), c);
+      } else {
+        res.segment<3>(3 * c).setZero();
+      }
+    }
+    for (int j = 0; j < nf; ++j) {
+      const int row = 3 * (nh + j);
+      if (visible[static_cast<size_t>(nh + j)]) {
+        rigid_row(row, x_head.segment<3>(3 * j), nh + j);
+      } else {
+        res.segment<3>(row).setZero();
+        if (jacobian) jac.block(row, 6, 3, np).setZero();
+      }
+    }
+    // Throat markers, lab frame.
+    if (nf < ns) {
+      x_rest.tail(3 * (ns - nf)).noalias() = m->rest_loadings.bottomRows(3 * (ns - nf)) * p;
+      x_rest.tail(3 * (ns - nf)) += m->rest_mean.tail(3 * (ns - nf));
+    }
+    for (int j = nf; j < ns; ++j) {
       const int row = 3 * (nh + j);
       if (!visible[static_cast<size_t>(nh + j)]) {
         res.segment<3>(row).setZero();
@@ -425,12 +456,8 @@ struct FrameProblem {
       if (jacobian) {
         jac.block<3, 3>(row, 0) = -w * Hat(u) * jl;
         jac.block(row, 3, 3, 3).diagonal().setConstant(w);
-        if (w == 1.0) {
-          jac.block(row, 6, 3, np).noalias() = r * m->loadings.middleRows(3 * j, 3);
-        } else {
-          jac.block(row, 6, 3, np).noalias() = (w * r) * m->loadings.middleRows(3 * j, 3);
-          jac.block(row, 6, 3, np) += m->rest_loadings.middleRows(3 * j, 3);
-        }
+        jac.block(row, 6, 3, np).noalias() = (w * r) * m->loadings.middleRows(3 * j, 3);
+        jac.block(row, 6, 3, np) += m->rest_loadings.middleRows(3 * j, 3);
       }
     }
     const int prow = 3 * (nh + ns);
@@ -478,6 +505,12 @@ InversionResult InvertFace(const FaceModel& model, const MarkerArray& take, cons
     prep.rest_loadings.middleRows(3 * j, 3) = (1.0 - w) * prep.rest.rotation * prep.loadings.middleRows(3 * j, 3);
   }
 
+  // Shape markers with w = 1 come first (face before throat); a throat
+  // marker with a weight of exactly 1 keeps the lab residual: same cost.
+  while (prep.num_rigid_shape < static_cast<int>(layout.face.size()) && prep.weights(prep.num_rigid_shape) == 1.0) {
+    ++prep.num_rigid_shape;
+  }
+
   const int64_t frames = take.frames();
   const int nm = nh + ns;
   InversionResult out;
@@ -491,16 +524,15 @@ InversionResult InvertFace(const FaceModel& model, const MarkerArray& take, cons
   FrameProblem problem;
   problem.m = &prep;
   problem.prior = options.prior_mm;
-  problem.ref0.resize(3, nh);
   problem.obs.resize(3, nm);
   problem.visible.assign(static_cast<size_t>(nm), 0);
   problem.x_head.resize(3 * ns);
   problem.x_rest.resize(3 * ns);
   ceres::TinySolver<FrameProblem> solver;
   solver.options.max_num_iterations = options.max_iterations + 1;  // TinySolver counts the start as one
-  solver.options.gradient_tolerance = 1e-12;
-  solver.options.parameter_tolerance = 1e-12;
-  solver.options.function_tolerance = 1e-14;
+  solver.options.gradient_tolerance = 1e-10;
+  solver.options.parameter_tolerance = 1e-9;
+  solver.options.function_tolerance = 1e-12;
   solver.options.cost_threshold = 1e-24;
   Eigen::VectorXd x(6 + np);
   Eigen::VectorXd prev_p(np);
@@ -553,7 +585,6 @@ InversionResult InvertFace(const FaceModel& model, const MarkerArray& take, cons
       prev_p = np > 0 ? model.shape.Estimate(coords, mask) : Eigen::VectorXd();
       if (!prev_p.allFinite()) prev_p.setZero();
     }
-    problem.ref0.noalias() = problem.r0 * prep.reference;
     x.head<6>().setZero();
     x.tail(np) = prev_p;
     const auto& summary = solver.Solve(problem, &x);
