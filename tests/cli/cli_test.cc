@@ -22,6 +22,7 @@
 #include "io/corpus/corpus.h"
 #include "io/formats/textgrid.h"
 #include "io/formats/wav.h"
+#include "tests/cli/cli_util.h"
 #include "tests/testing/testing.h"
 
 namespace csw {
@@ -30,31 +31,9 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-struct RunResult {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
-
-// Runs csw with arguments (shell-quoted by the caller), capturing stdout and stderr.
-RunResult Csw(const std::string& args, const fs::path& dir) {
-  fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  std::string cmd = std::string(CSW_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
-  int status = std::system(cmd.c_str());
-  RunResult r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  auto slurp = [](const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  };
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
-
-std::string Q(const fs::path& p) { return "'" + p.string() + "'"; }
+using testing::Csw;
+using testing::Q;
+using testing::RunResult;
 
 Take SmallTake(const std::string& name, int64_t frames, int64_t markers) {
   Take t;

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "workbench/jobs/jobs.h"
+#include "workbench/jobs/model_jobs.h"
 
 namespace csw::cli {
 
@@ -170,6 +171,88 @@ class SimulateCommand : public Command {
   jobs::SimulateJobOptions options_;
 };
 
+class FitCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("fit",
+                              "Fit a rigid-motion (head/forearm), face or hand model on corpus takes and save it "
+                              "into a model file (other models in the file are kept)");
+    sub_->add_option("kind", options_.kind, "rigid, face or hand")
+        ->required()
+        ->check(CLI::IsMember({"rigid", "face", "hand"}));
+    sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
+    sub_->add_option("--train", options_.train,
+                     "Training takes: name, or name@first:end in frames or percentages (name@:50%); "
+                     "default every take")
+        ->delimiter(',');
+    sub_->add_option("--markerset", options_.markerset, "Marker-set JSON naming the clusters, face and hand markers");
+    sub_->add_option("--config", options_.config, "Model configuration JSON (docs/model-format.md)");
+    sub_->add_option("--figures", options_.figures, "Folder for PNG and SVG figures");
+    sub_->add_option("-o,--output", options_.output, "Model file (HDF5)")->required();
+    sub_->add_flag("--json", json_, "Print the fit summary as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json s = jobs::Fit(options_, progress);
+    if (json_) {
+      PrintJson(s);
+    } else {
+      std::cout << jobs::FitText(s);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::FitOptions options_;
+  bool json_ = false;
+};
+
+class InvertCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("invert",
+                              "Estimate the models' parameters frame by frame from the visible markers, "
+                              "reconstruct every marker and report the errors; --fill saves each take with "
+                              "its gaps filled as a new take <take>.filled");
+    sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
+    sub_->add_option("--models", options_.models, "Model file from csw fit")->required();
+    sub_->add_option("--takes", options_.takes, "Takes (name or name@first:end); default every take")
+        ->delimiter(',');
+    sub_->add_option("--only", options_.only, "Invert only the face or the hand model")
+        ->check(CLI::IsMember({"face", "hand"}));
+    sub_->add_flag("--fill", options_.fill, "Write the filled takes into the corpus as new takes");
+    sub_->add_option("--hide", options_.hide_fraction,
+                     "Hide this fraction of the visible samples at random and report their reconstruction error");
+    sub_->add_option("--seed", options_.seed, "Random seed for --hide")->capture_default_str();
+    sub_->add_option("--truth", options_.truth,
+                     "Folder with <take>.clean.c3d (e.g. from csw simulate --clean): score occluded samples "
+                     "and cluster poses against it");
+    sub_->add_option("--figures", options_.figures, "Folder for PNG and SVG figures");
+    sub_->add_option("--threads", options_.threads, "Takes inverted in parallel (0 = all cores)")
+        ->capture_default_str();
+    sub_->add_option("--prior", options_.inversion.prior_mm,
+                     "Weight (mm per parameter sd) pulling shape parameters towards the mean")
+        ->capture_default_str();
+    sub_->add_option("--max-iterations", options_.inversion.max_iterations, "Solver iterations per frame")
+        ->capture_default_str();
+    sub_->add_flag("--json", json_, "Print the error report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json s = jobs::Invert(options_, progress);
+    if (json_) {
+      PrintJson(s);
+    } else {
+      std::cout << jobs::InvertText(s);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::InvertOptions options_;
+  bool json_ = false;
+};
+
 }  // namespace
 
 std::vector<std::unique_ptr<Command>> MakeCommands() {
@@ -179,6 +262,8 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<InfoCommand>());
   c.push_back(std::make_unique<ExportCommand>());
   c.push_back(std::make_unique<SimulateCommand>());
+  c.push_back(std::make_unique<FitCommand>());
+  c.push_back(std::make_unique<InvertCommand>());
   return c;
 }
 
