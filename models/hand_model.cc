@@ -266,6 +266,7 @@ struct Kernel {
   Eigen::VectorXd mean;                // na
   Eigen::MatrixXd cs;                  // na × p: components · diag(scale)
   double prior = 0;
+  double forearm_weight = 1;  // on the forearm cluster residuals (see the header)
 
   explicit Kernel(const HandModel& model, double prior_mm) {
     nf = static_cast<int>(model.forearm.reference.cols());
@@ -303,6 +304,8 @@ struct Kernel {
       cs.row(k) = pca.components.row(i).cwiseProduct(model.param_scale.transpose());
     }
     prior = prior_mm;
+    const double hand_rms = model.info.training_rms_mm, forearm_rms = model.forearm.info.training_rms_mm;
+    if (hand_rms > 0 && forearm_rms > 0) forearm_weight = std::clamp(hand_rms / forearm_rms, 1.0, 10.0);
   }
 };
 
@@ -356,6 +359,7 @@ struct HandResidual {
       const Eigen::Vector3d local =
           j < k->nf ? Eigen::Vector3d(k->reference.col(j)) : Eigen::Vector3d(w->local.segment<3>(3 * (j - k->nf)));
       res.segment<3>(3 * j) = r * local + t - w->obs.col(j);
+      if (j < k->nf) res.segment<3>(3 * j) *= k->forearm_weight;
     }
     for (int i = 0; i < k->p; ++i) res(3 * nm + i) = k->prior * x[6 + i];
     if (jacobian == nullptr) return true;
@@ -371,9 +375,12 @@ struct HandResidual {
       if (!w->visible[static_cast<size_t>(j)]) continue;
       const Eigen::Vector3d local =
           j < k->nf ? Eigen::Vector3d(k->reference.col(j)) : Eigen::Vector3d(w->local.segment<3>(3 * (j - k->nf)));
-      jac.block<3, 3>(3 * j, 0).noalias() = -Skew(r * local) * jl;
-      jac.block<3, 3>(3 * j, 3).setIdentity();
-      if (j >= k->nf) {
+      if (j < k->nf) {
+        jac.block<3, 3>(3 * j, 0).noalias() = -k->forearm_weight * Skew(r * local) * jl;
+        jac.block<3, 3>(3 * j, 3) = k->forearm_weight * Eigen::Matrix3d::Identity();
+      } else {
+        jac.block<3, 3>(3 * j, 0).noalias() = -Skew(r * local) * jl;
+        jac.block<3, 3>(3 * j, 3).setIdentity();
         jac.block(3 * j, 6, 3, k->p).noalias() = r * w->dlocal.middleRows(3 * (j - k->nf), 3);
       }
     }
@@ -666,9 +673,11 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
   ceres::TinySolver<HandResidual> solver;
   solver.options.max_num_iterations = std::max(1, options.max_iterations);
   solver.options.gradient_tolerance = 1e-10;
-  solver.options.parameter_tolerance = 1e-9;
-  solver.options.function_tolerance = 1e-10;
-  Eigen::VectorXd x(6 + p);
+  solver.options.parameter_tolerance = 1e-8;
+  Eigen::VectorXd x(6 + p), x2(6 + p);
+  Eigen::VectorXd res0(residual.NumResiduals());
+  // Warm starts ending above this RMS (mm, per visible marker) are retried cold.
+  const double retry_rms_mm = 3.0 * model.info.training_rms_mm + 1.0;
   Eigen::VectorXd q = Eigen::VectorXd::Zero(p);
   Eigen::Matrix3d r_prev = Eigen::Matrix3d::Identity();
   Eigen::Vector3d t_prev = Eigen::Vector3d::Zero();
@@ -694,26 +703,64 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
       have_prev = false;
       continue;
     }
-    if (options.warm_start && have_prev) {
-      w.r0 = r_prev;
-      w.t0 = t_prev;
-    } else {
-      // Cold start: Kabsch on the forearm cluster, parameters from the measured angles.
+    // One solve from the current start (w.r0, w.t0, q); returns the final cost.
+    auto solve = [&](Eigen::VectorXd* xx, bool* conv) {
+      xx->head<6>().setZero();
+      xx->tail(p) = q;
+      residual(xx->data(), res0.data(), nullptr);
+      const double cost0 = 0.5 * res0.squaredNorm();
+      solver.options.function_tolerance = 1e-7 * cost0 + 1e-14;
+      const auto& summary = solver.Solve(residual, xx);
+      *conv = summary.status != ceres::TinySolver<HandResidual>::HIT_MAX_ITERATIONS;
+      residual(xx->data(), res0.data(), nullptr);
+      return xx->allFinite() ? 0.5 * res0.squaredNorm() : std::numeric_limits<double>::infinity();
+    };
+    auto cold_start = [&]() {
+      // Kabsch on the forearm cluster, parameters from the measured angles.
       forearm_obs = w.obs.leftCols(nf);
       const RigidFit fit = EstimateRigidKabsch(kernel.reference, forearm_obs);
-      if (!fit.valid) {
-        have_prev = false;
-        continue;
-      }
+      if (!fit.valid) return false;
       w.r0 = fit.transform.rotation;
       w.t0 = fit.transform.translation;
       hand_local = fit.transform.rotation.transpose() * (w.obs.rightCols(nh).colwise() - fit.transform.translation);
       q = ParamsFromAngles(model, model.Angles(hand_local));
+      return true;
+    };
+    bool conv = false;
+    double cost = 0;
+    const bool warm = options.warm_start && have_prev;
+    if (warm) {
+      w.r0 = r_prev;
+      w.t0 = t_prev;
+      cost = solve(&x, &conv);
+      // A warm start that ends far worse than the model's usual fit (a jump
+      // in the data, a wrong local minimum): try a cold start, keep the better.
+      const double rms = std::sqrt(2 * cost / std::max(1, vis_f + vis_h));
+      if (!(rms <= retry_rms_mm)) {
+        const Eigen::Matrix3d r_warm = w.r0;
+        const Eigen::Vector3d t_warm = w.t0;
+        const Eigen::VectorXd q_warm = q;
+        bool conv2 = false;
+        double cost2 = std::numeric_limits<double>::infinity();
+        if (cold_start()) cost2 = solve(&x2, &conv2);
+        if (cost2 < cost) {
+          x = x2;
+          cost = cost2;
+          conv = conv2;
+        } else {
+          w.r0 = r_warm;
+          w.t0 = t_warm;
+          q = q_warm;
+        }
+      }
+    } else {
+      if (!cold_start()) {
+        have_prev = false;
+        continue;
+      }
+      cost = solve(&x, &conv);
     }
-    x.head<6>().setZero();
-    x.tail(p) = q;
-    const auto& summary = solver.Solve(residual, &x);
-    if (!x.allFinite()) {
+    if (!x.allFinite() || !std::isfinite(cost)) {
       have_prev = false;
       continue;
     }
@@ -730,7 +777,7 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
     out.pose.row(f) = pose.Parameters().transpose();
     out.params.row(f) = q.cwiseProduct(model.param_scale).transpose();
     out.solved[static_cast<size_t>(f)] = 1;
-    out.converged[static_cast<size_t>(f)] = summary.status != ceres::TinySolver<HandResidual>::HIT_MAX_ITERATIONS;
+    out.converged[static_cast<size_t>(f)] = conv ? 1 : 0;
     LocalCoordinates(kernel, q.data(), &w);
     for (int j = 0; j < nm; ++j) {
       const Eigen::Vector3d lab = j < nf ? Eigen::Vector3d(r * kernel.reference.col(j) + t)

@@ -108,6 +108,12 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
 
 // Per-frame inversion of a model-ordered take (see inversion.h). pose is the
 // forearm cluster pose; params the naH parameters (unscaled, as Predict takes them).
+// The forearm cluster residuals are weighted by
+// clamp(info.training_rms_mm / forearm.info.training_rms_mm, 1, 10) (1 when
+// either is 0): the cluster is rigid to within noise while the hand model
+// misfits by millimetres, so unweighted hand residuals would tilt the forearm.
+// A warm start ending with an RMS above 3 · info.training_rms_mm + 1 mm is
+// retried from a cold start (Kabsch + measured angles) and the better kept.
 InversionResult InvertHand(const HandModel& model, const MarkerArray& take,
                            const InversionOptions& options = {}, Progress* progress = nullptr);
 
