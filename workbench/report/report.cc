@@ -1,5 +1,10 @@
 #include "workbench/report/report.h"
 
+#include <unistd.h>
+
+#include <QDir>
+#include <QFile>
+
 #include <qcustomplot.h>
 
 #include <QApplication>
@@ -131,6 +136,14 @@ void EnsureGuiApplication() {
   QByteArray platform = qgetenv("QT_QPA_PLATFORM");
   bool needs_display = platform.startsWith("xcb") || platform.startsWith("wayland");
   if (platform.isEmpty() || (needs_display && !display)) qputenv("QT_QPA_PLATFORM", "offscreen");
+  // Headless runs (CI, ssh) often lack XDG_RUNTIME_DIR; Qt then falls back to
+  // /tmp/runtime-<user> with a warning on stderr for every command. Do the same quietly.
+  if (qEnvironmentVariableIsEmpty("XDG_RUNTIME_DIR")) {
+    const QString dir = QDir::tempPath() + "/runtime-csw-" + QString::number(getuid());
+    QDir().mkpath(dir);
+    QFile::setPermissions(dir, QFileDevice::ReadOwner | QFileDevice::WriteOwner | QFileDevice::ExeOwner);
+    qputenv("XDG_RUNTIME_DIR", dir.toLocal8Bit());
+  }
   static int argc = 1;
   static char name[] = "csw";
   static char* argv[] = {name, nullptr};
