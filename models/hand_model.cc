@@ -11,6 +11,7 @@
 #include <Eigen/SVD>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <Eigen/QR>
 #include <ceres/tiny_solver.h>
 
 #include "core/error.h"
@@ -417,6 +418,62 @@ Eigen::VectorXd ParamsFromAngles(const HandModel& model, const Eigen::VectorXd& 
   return q;
 }
 
+// The angle PCA weighted by each angle's effect on the markers (see
+// HandModelOptions::weighted_angle_pca), then the regression on the angles it
+// predicts, as FitHandShapeModel does.
+HandShapeModel FitWeightedShapeModel(const Eigen::MatrixXd& angles, const Eigen::MatrixXd& coords, int k,
+                                     const HandRegressionOptions& options) {
+  const Eigen::Index n = angles.cols();
+  const Eigen::Index frames = angles.rows();
+  const HandRegression raw = FitHandRegression(angles, coords, options);
+  const AnglePca full = FitAnglePca(angles, 1);  // its mean: circular mean + shift
+  const double markers = static_cast<double>(coords.cols()) / 3.0;
+  Eigen::VectorXd w(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double m = full.mean(i);
+    w(i) = (-std::sin(m) * raw.coefficients.row(1 + i) + std::cos(m) * raw.coefficients.row(1 + n + i)).norm() /
+           std::sqrt(markers);
+  }
+  const double floor = std::max(1e-12, 1e-6 * w.maxCoeff());
+  for (Eigen::Index i = 0; i < n; ++i) w(i) = std::max(w(i), floor);
+  Eigen::MatrixXd dev(frames, n);
+  for (Eigen::Index f = 0; f < frames; ++f) {
+    for (Eigen::Index i = 0; i < n; ++i) dev(f, i) = WrapAngle(angles(f, i) - full.mean(i));
+  }
+  dev.rowwise() -= dev.colwise().mean();
+  const Eigen::MatrixXd z = dev * w.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(z.transpose() * z);
+  Eigen::MatrixXd basis(n, k);
+  for (int c = 0; c < k; ++c) basis.col(c) = w.cwiseInverse().asDiagonal() * eig.eigenvectors().col(n - 1 - c);
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(basis);
+  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(n, k);
+  // Within the subspace: uncorrelated parameters, largest variance first.
+  const Eigen::MatrixXd params = dev * q;
+  const Eigen::MatrixXd cov = params.transpose() * params / static_cast<double>(frames - 1);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> e2(cov);
+  const double total = (dev.transpose() * dev).trace() / static_cast<double>(frames - 1);
+  HandShapeModel model;
+  AnglePca& pca = model.angle_pca;
+  pca.mean = full.mean;
+  pca.components.resize(n, k);
+  pca.variances.resize(k);
+  for (int c = 0; c < k; ++c) {
+    Eigen::VectorXd v = q * e2.eigenvectors().col(k - 1 - c);
+    Eigen::Index big = 0;
+    v.cwiseAbs().maxCoeff(&big);
+    if (v(big) < 0) v = -v;  // deterministic sign
+    pca.components.col(c) = v;
+    pca.variances(c) = std::max(0.0, e2.eigenvalues()(k - 1 - c));
+    pca.variance_explained.push_back(total > 0 ? pca.variances(c) / total : 0.0);
+  }
+  Eigen::MatrixXd predicted(frames, n);
+  for (Eigen::Index f = 0; f < frames; ++f) {
+    predicted.row(f) = pca.Angles(pca.Params(angles.row(f).transpose())).transpose();
+  }
+  model.regression = FitHandRegression(predicted, coords, options);
+  return model;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------
@@ -609,7 +666,9 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
   coords.conservativeResize(rows, Eigen::NoChange);
 
   if (progress) progress->Update("hand model: regression", 0.0);
-  model.shape = FitHandShapeModel(angles, coords, options.angle_components, options.regression);
+  model.shape = options.weighted_angle_pca
+                    ? FitWeightedShapeModel(angles, coords, options.angle_components, options.regression)
+                    : FitHandShapeModel(angles, coords, options.angle_components, options.regression);
   for (const auto& seg : layout.segments) {
     for (const char* what : {"flexion", "spread", "twist"}) model.angle_names.push_back(seg.name + "." + what);
   }

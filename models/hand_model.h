@@ -64,6 +64,15 @@ struct HandLayout {
 
 struct HandModelOptions {
   int angle_components = 12;        // naH (the seed retains 12)
+  // true: the angle PCA is weighted by each angle's effect on the markers
+  // (w_i = RMS marker displacement per radian of angle i at its mean, from a
+  // first regression on the measured angles): the naH directions are those
+  // that move the markers most, not those of the largest raw angle variance
+  // (a noisy twist of a short phalanx has a large angle variance and little
+  // effect). Components are then orthonormalised in angle space and rotated
+  // to uncorrelated parameters; variance_explained stays a fraction of the
+  // total (unweighted) angle variance. false: the seed's plain angle PCA.
+  bool weighted_angle_pca = true;
   double min_distance_mm = 2.0;     // training-frame selection
   HandRegressionOptions regression; // ridge etc. (documented in hand_regression.h)
   RigidModelOptions forearm;        // forearm cluster fit and motion PCA (nmH)

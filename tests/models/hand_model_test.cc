@@ -391,6 +391,16 @@ TEST(HandModel, FitReproducesTheGeneratingModel) {
   for (double v : model.shape.angle_pca.variance_explained) explained += v;
   EXPECT_NEAR(explained, 1.0, 1e-9);
   for (int k = 0; k < 2; ++k) EXPECT_NEAR(model.param_scale(k), std::sqrt(model.shape.angle_pca.variances(k)), 1e-12);
+  // Components are orthonormal, parameters uncorrelated, whichever PCA.
+  const Eigen::MatrixXd& comp = model.shape.angle_pca.components;
+  EXPECT_LT((comp.transpose() * comp - Eigen::MatrixXd::Identity(2, 2)).cwiseAbs().maxCoeff(), 1e-12);
+  HandModelOptions plain = opt;
+  plain.weighted_angle_pca = false;
+  const HandModel seed_model = FitHandModel(h.layout, {takes[0], takes[1]}, plain);
+  EXPECT_LT(seed_model.info.training_rms_mm, 1e-3);
+  // Same generating subspace: the projectors agree.
+  const Eigen::MatrixXd& c2 = seed_model.shape.angle_pca.components;
+  EXPECT_LT((comp * comp.transpose() - c2 * c2.transpose()).cwiseAbs().maxCoeff(), 1e-6);
 
   // Held-out take: reconstruction of visible and hidden markers matches the truth.
   InversionOptions iopt;
