@@ -182,11 +182,20 @@ void ValidateRigid(const RigidModel& m, const std::string& object, const Checker
   ValidateInfo(m.info, object, c);
 }
 
-void ValidateRotation(const Eigen::Matrix3d& r, const std::string& object, const Checker& c) {
-  RequireFinite(r, object, c);
+// `which` names the matrix within a stack of them (" [2]"), or is empty.
+void ValidateRotation(const Eigen::Matrix3d& r, const std::string& object, const Checker& c,
+                      const std::string& which = "") {
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      if (!std::isfinite(r(i, j))) {
+        c.Fail(object, "non-finite value (" + Num(r(i, j)) + ") at" + which + " [" + Str(i) + ", " + Str(j) + "]");
+      }
+    }
+  }
   double err = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   c.Require(err <= kRotationTolerance && r.determinant() > 0, object,
-            "is not a rotation matrix (|RᵀR − I| = " + Num(err) + ", det = " + Num(r.determinant()) + ")");
+            "matrix" + which + " is not a rotation (|RᵀR − I| = " + Num(err) + ", det = " + Num(r.determinant()) +
+                ")");
 }
 
 void ValidateGuidedPca(const GuidedPcaModel& s, int shape_markers, const std::string& object, const Checker& c) {
@@ -263,6 +272,13 @@ void ValidateHand(const HandModel& m, const std::string& object, const Checker& 
               "has " + Str(static_cast<int64_t>(s.markers.size())) + " markers, at least " +
                   Str(static_cast<int64_t>(min_markers)) + " are needed");
     RequireIndices(s.markers, hands, so + "/markers", "hand marker indices", c);
+  }
+  if (!m.rest.empty()) {
+    RequireLength(static_cast<int64_t>(m.rest.size()), static_cast<int64_t>(l.segments.size()), object + "/rest",
+                  "empty or one rotation per segment", c);
+  }
+  for (size_t i = 0; i < m.rest.size(); ++i) {
+    ValidateRotation(m.rest[i], object + "/rest", c, " [" + Str(static_cast<int64_t>(i)) + "]");
   }
   ValidateRigid(m.forearm, object + "/forearm", c);
   c.Require(m.forearm.markers == l.forearm, object + "/forearm/markers", "differs from " + object + "/layout/forearm");
@@ -437,6 +453,15 @@ void WriteHand(hid_t parent, const HandModel& m, const Where& where) {
     WriteIndices(st.get(), "markers", s.markers, where, sto + "/markers");
   }
 
+  // Rest orientations: [segments][3][3], each matrix row by row.
+  std::vector<double> rest;
+  rest.reserve(9 * m.rest.size());
+  for (const Eigen::Matrix3d& r : m.rest) {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) rest.push_back(r(i, j));
+  }
+  WriteArray(g.get(), "rest", {static_cast<hsize_t>(m.rest.size()), 3, 3}, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
+             rest.data(), where, object + "/rest");
   WriteRigid(g.get(), "forearm", m.forearm, where, object + "/forearm");
   h5::WriteStrings(g.get(), "angle_names", m.angle_names, where, object + "/angle_names");
   WriteVector(g.get(), "param_scale", m.param_scale, where, object + "/param_scale");
@@ -469,6 +494,9 @@ Handle FileAccessList(const Where& where) {
   // Structures readable by HDF5 1.8 (older MATLAB), as for the corpus.
   h5::Check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18), where, "cannot set file format bounds",
             "");
+  // Lock the file where the file system allows it, and still work where it
+  // does not (some network file systems).
+  h5::Check(H5Pset_file_locking(fapl.get(), true, true), where, "cannot set file locking", "");
   h5::Check(H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_SEMI), where, "cannot set close degree", "");
   return fapl;
 }
@@ -503,7 +531,7 @@ Numbers ReadNumbers(hid_t loc, const std::string& name, size_t rank, const std::
   if (r < 0) c.Fail(object, "has no readable shape");
   if (static_cast<size_t>(r) != rank) {
     c.Fail(object, "has rank " + Str(r) + ", expected " + Str(static_cast<int64_t>(rank)) +
-                       (rank == 1 ? " (a vector)" : " (a matrix)"));
+                       (rank == 1 ? " (a vector)" : rank == 2 ? " (a matrix)" : " (a stack of matrices)"));
   }
   Numbers out;
   out.dims.resize(rank);
@@ -706,6 +734,16 @@ HandModel ReadHand(hid_t parent, const Checker& c) {
     m.layout.segments.push_back(std::move(s));
   }
 
+  Numbers rest = ReadNumbers(g.get(), "rest", 3, object + "/rest", c);
+  if (rest.dims[1] != 3 || rest.dims[2] != 3) {
+    c.Fail(object + "/rest", "has shape (" + Str(static_cast<int64_t>(rest.dims[0])) + ", " +
+                                 Str(static_cast<int64_t>(rest.dims[1])) + ", " +
+                                 Str(static_cast<int64_t>(rest.dims[2])) + "), expected (segments, 3, 3)");
+  }
+  for (hsize_t i = 0; i < rest.dims[0]; ++i) {
+    using RowMajor3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+    m.rest.push_back(Eigen::Map<const RowMajor3>(rest.values.data() + 9 * i));
+  }
   m.forearm = ReadRigid(g.get(), "forearm", object + "/forearm", c);
   m.angle_names = ReadStringList(g.get(), "angle_names", object + "/angle_names", c);
   m.param_scale = ReadVector(g.get(), "param_scale", object + "/param_scale", c);

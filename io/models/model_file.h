@@ -6,6 +6,9 @@
 //
 // Saving is crash-safe: the file is written to a temporary sibling, fsynced and
 // renamed over the target, so a model file is never left half-written.
+// Every HDF5 call holds the process-wide HDF5 lock of io/corpus/hdf5_util.h
+// (the Debian HDF5 library is not thread-safe), so these functions may be
+// called from several threads, also while a corpus is being read.
 #include <optional>
 #include <string>
 

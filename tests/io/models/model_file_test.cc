@@ -111,6 +111,9 @@ HandModel MakeHand() {
   m.layout.hand = {"hand_a", "hand_b", "hand_c", "index_1", "index_2", "index_3", "thumb_tip"};
   m.layout.segments = {{"palm", -1, {0, 1, 2}}, {"index_prox", 0, {3, 4}}, {"index_dist", 1, {4, 5}}};
   m.forearm = MakeRigid("forearm", m.layout.forearm, 3, 30);
+  for (int i = 0; i < 3; ++i) {
+    m.rest.push_back(Eigen::AngleAxisd(0.2 + 0.5 * i, Eigen::Vector3d(1, -i, 2).normalized()).toRotationMatrix());
+  }
   for (const auto& s : m.layout.segments) {
     for (const char* a : {"flexion", "spread", "twist"}) m.angle_names.push_back(s.name + "." + a);
   }
@@ -303,6 +306,7 @@ TEST(ModelFile, EmptyListsAndLargeTextRoundTrip) {
   f.face->info.config_json = std::string(300000, 'x') + "ü";  // beyond the 64 KiB compact attribute limit
   f.hand = MakeHand();
   f.hand->shape.regression.warnings.clear();
+  f.hand->rest.clear();  // = identity for every segment
   f.head = MakeRigid("head", {"a", "b", "c"}, 0, 7);  // no motion component kept
   const std::string path = (dir / "m.h5").string();
   SaveModelFile(path, f);
@@ -370,6 +374,9 @@ TEST(ModelFile, DatasetsHaveTheDocumentedShapes) {
   std::vector<double> rot = raw.ReadDoubles("/face/rest_pose/rotation", &dims);
   ASSERT_EQ(dims, (std::vector<hsize_t>{3, 3}));
   EXPECT_EQ(rot[3 * 0 + 2], f.face->rest_pose.rotation(0, 2));
+  std::vector<double> rest = raw.ReadDoubles("/hand/rest", &dims);
+  ASSERT_EQ(dims, (std::vector<hsize_t>{3, 3, 3}));  // segments, then each matrix row by row
+  EXPECT_EQ(rest[9 * 2 + 3 * 0 + 1], f.hand->rest[2](0, 1));
   std::vector<double> seg = raw.ReadDoubles("/hand/layout/segments/002/markers", &dims);
   EXPECT_EQ(seg, (std::vector<double>{4, 5}));
 }
@@ -469,7 +476,11 @@ TEST(ModelFile, MisShapedOrMissingDatasetIsAParseErrorNamingIt) {
       {"/head_motion/reference", {5, 2}, {}, "expected (points, 3)"},
       {"/forearm_motion/motion/mean", {5}, {}, "has 5 elements, expected 6"},
       {"/face/head_weights", {7}, {1, 1, 1, 1, 1, 1.5, 0.25}, "outside [0, 1]"},
-      {"/face/rest_pose/rotation", {3, 3}, {1, 0, 0, 0, 1, 0, 0, 0, 2}, "is not a rotation matrix"},
+      {"/face/rest_pose/rotation", {3, 3}, {1, 0, 0, 0, 1, 0, 0, 0, 2}, "is not a rotation"},
+      {"/hand/rest", {3, 3, 3}, {1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, -1},
+       "matrix [2] is not a rotation"},
+      {"/hand/rest", {2, 3, 3}, {}, "has 2 elements, expected 3"},
+      {"/hand/rest", {3, 9}, {}, "has rank 2, expected 3"},
       {"/face/shape/steps/001/markers", {2}, {1, 9}, "index 9 at position 1 is outside 0..6"},
       {"/hand/layout/segments/001/markers", {2}, {3, 2.5}, "is not an integer index"},
       {"/hand/shape/angle_pca/variances", {4}, {1, 2, std::numeric_limits<double>::infinity(), 4},

@@ -83,6 +83,8 @@ inline void ExpectSameHand(const HandModel& a, const HandModel& b) {
     EXPECT_EQ(a.layout.segments[i].parent, b.layout.segments[i].parent) << i;
     EXPECT_EQ(a.layout.segments[i].markers, b.layout.segments[i].markers) << i;
   }
+  ASSERT_EQ(a.rest.size(), b.rest.size());
+  for (size_t i = 0; i < a.rest.size(); ++i) ExpectSameMatrix(a.rest[i], b.rest[i], "hand.rest " + std::to_string(i));
   ExpectSameRigid(a.forearm, b.forearm, "hand.forearm");
   EXPECT_EQ(a.angle_names, b.angle_names);
   const AnglePca& pa = a.shape.angle_pca;
