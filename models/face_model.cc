@@ -377,9 +377,10 @@ struct Prepared {
 // respect to δ it is −[y]× R0ᵀ J_l(δ)ᵀ with y = Rᵀ(obs − t) (exact: J_l is
 // the left Jacobian of SO(3)). Throat markers (w < 1) keep the lab residual
 // w (R x + t) + (1 − w)(R̄ x + t̄) − obs.
+template <int kNumParameters>
 struct FrameProblem {
   using Scalar = double;
-  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = Eigen::Dynamic };
+  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = kNumParameters };
 
   const Prepared* m = nullptr;
   double prior = 0;
@@ -467,6 +468,124 @@ struct FrameProblem {
   }
 };
 
+// The per-frame loop; N = 6 + P when P is small enough to be a compile-time
+// size (fixed-size normal equations in TinySolver), else Eigen::Dynamic.
+template <int N>
+void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray& take,
+                 const InversionOptions& options, Progress* progress, InversionResult& out) {
+  const int nh = prep.nh, ns = prep.ns, np = prep.np;
+  const int nm = nh + ns;
+  const int64_t frames = take.frames();
+  FrameProblem<N> problem;
+  problem.m = &prep;
+  problem.prior = options.prior_mm;
+  problem.obs.resize(3, nm);
+  problem.visible.assign(static_cast<size_t>(nm), 0);
+  problem.x_head.resize(3 * ns);
+  problem.x_rest.resize(3 * ns);
+  ceres::TinySolver<FrameProblem<N>> solver;
+  solver.options.max_num_iterations = options.max_iterations + 1;  // TinySolver counts the start as one
+  solver.options.gradient_tolerance = 1e-10;
+  solver.options.parameter_tolerance = 1e-9;
+  solver.options.function_tolerance = 1e-12;
+  solver.options.cost_threshold = 1e-24;
+  Eigen::Matrix<double, N, 1> x;
+  x.resize(6 + np);
+  Eigen::VectorXd prev_p(np);
+  bool have_prev = false;
+  Eigen::Matrix3Xd lab(3, nm);
+  Eigen::Matrix3Xd head_obs(3, nh);
+
+  for (int64_t f = 0; f < frames; ++f) {
+    if (progress && (f & 1023) == 0) progress->Update("invert face", static_cast<double>(f) / static_cast<double>(frames));
+    int vis_head = 0, vis_shape = 0;
+    for (int c = 0; c < nm; ++c) {
+      const float* q = take.at(f, c);
+      const bool v = std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]);
+      problem.visible[static_cast<size_t>(c)] = v ? 1 : 0;
+      if (v) {
+        problem.obs.col(c) = Eigen::Vector3d(q[0], q[1], q[2]);
+        (c < nh ? vis_head : vis_shape)++;
+      } else {
+        problem.obs.col(c).setZero();
+      }
+    }
+    if (vis_head < std::max(3, options.min_cluster_markers) || vis_shape < std::max(1, options.min_shape_markers)) {
+      have_prev = false;
+      continue;
+    }
+    if (!(options.warm_start && have_prev)) {
+      // Cold start: Kabsch on the head cluster, then the shape parameters
+      // from the visible shape markers taken to the head frame.
+      for (int k = 0; k < nh; ++k) {
+        if (problem.visible[static_cast<size_t>(k)]) {
+          head_obs.col(k) = problem.obs.col(k);
+        } else {
+          head_obs.col(k).setConstant(kNaN);
+        }
+      }
+      const RigidFit fit = EstimateRigidKabsch(prep.reference, head_obs);
+      if (!fit.valid) {
+        have_prev = false;
+        continue;
+      }
+      problem.r0 = fit.transform.rotation;
+      problem.t0 = fit.transform.translation;
+      Eigen::VectorXd coords = Eigen::VectorXd::Zero(3 * ns);
+      std::vector<bool> mask(static_cast<size_t>(3 * ns), false);
+      for (int j = 0; j < ns; ++j) {
+        if (!problem.visible[static_cast<size_t>(nh + j)]) continue;
+        coords.segment<3>(3 * j) = LabToHead(problem.obs.col(nh + j), fit.transform, prep.rest, prep.weights(j));
+        for (int k = 0; k < 3; ++k) mask[static_cast<size_t>(3 * j + k)] = true;
+      }
+      prev_p = np > 0 ? model.shape.Estimate(coords, mask) : Eigen::VectorXd();
+      if (!prev_p.allFinite()) prev_p.setZero();
+    }
+    x.template head<6>().setZero();
+    x.tail(np) = prev_p;
+    const auto& summary = solver.Solve(problem, &x);
+
+    Eigen::Matrix3d e;
+    ExpAndLeftJacobian(x.template head<3>(), &e, nullptr);
+    RigidTransform pose;
+    pose.rotation = e * problem.r0;
+    pose.translation = problem.t0 + x.template segment<3>(3);
+    const Eigen::VectorXd p = x.tail(np);
+    if (!pose.rotation.allFinite() || !pose.translation.allFinite() || !p.allFinite()) {
+      have_prev = false;
+      continue;
+    }
+    // Re-orthonormalise so rounding does not accumulate across warm starts.
+    {
+      const Eigen::Quaterniond qn(pose.rotation);
+      pose.rotation = qn.normalized().toRotationMatrix();
+    }
+    out.solved[static_cast<size_t>(f)] = 1;
+    out.converged[static_cast<size_t>(f)] =
+        summary.status != ceres::TinySolver<FrameProblem<N>>::HIT_MAX_ITERATIONS ? 1 : 0;
+    out.pose.row(f) = pose.Parameters().transpose();
+    out.params.row(f) = p.transpose();
+
+    // Reconstruct all model markers.
+    lab.leftCols(nh) = (pose.rotation * prep.reference).colwise() + pose.translation;
+    const Eigen::VectorXd xh = prep.mean + prep.loadings * p;
+    const Eigen::VectorXd xr = prep.rest_mean + prep.rest_loadings * p;
+    for (int j = 0; j < ns; ++j) {
+      const double w = prep.weights(j);
+      lab.col(nh + j) = w * (pose.rotation * xh.segment<3>(3 * j) + pose.translation) + xr.segment<3>(3 * j);
+    }
+    for (int c = 0; c < nm; ++c) {
+      float* q = out.reconstructed.at(f, c);
+      for (int k = 0; k < 3; ++k) q[k] = static_cast<float>(lab(k, c));
+      if (problem.visible[static_cast<size_t>(c)]) out.error_mm(f, c) = (lab.col(c) - problem.obs.col(c)).norm();
+    }
+    problem.r0 = pose.rotation;
+    problem.t0 = pose.translation;
+    prev_p = p;
+    have_prev = true;
+  }
+}
+
 }  // namespace
 
 InversionResult InvertFace(const FaceModel& model, const MarkerArray& take, const InversionOptions& options,
@@ -521,112 +640,24 @@ InversionResult InvertFace(const FaceModel& model, const MarkerArray& take, cons
   out.solved.assign(static_cast<size_t>(frames), 0);
   out.converged.assign(static_cast<size_t>(frames), 0);
 
-  FrameProblem problem;
-  problem.m = &prep;
-  problem.prior = options.prior_mm;
-  problem.obs.resize(3, nm);
-  problem.visible.assign(static_cast<size_t>(nm), 0);
-  problem.x_head.resize(3 * ns);
-  problem.x_rest.resize(3 * ns);
-  ceres::TinySolver<FrameProblem> solver;
-  solver.options.max_num_iterations = options.max_iterations + 1;  // TinySolver counts the start as one
-  solver.options.gradient_tolerance = 1e-10;
-  solver.options.parameter_tolerance = 1e-9;
-  solver.options.function_tolerance = 1e-12;
-  solver.options.cost_threshold = 1e-24;
-  Eigen::VectorXd x(6 + np);
-  Eigen::VectorXd prev_p(np);
-  bool have_prev = false;
-  Eigen::Matrix3Xd lab(3, nm);
-  Eigen::Matrix3Xd head_obs(3, nh);
-
-  for (int64_t f = 0; f < frames; ++f) {
-    if (progress && (f & 1023) == 0) progress->Update("invert face", static_cast<double>(f) / static_cast<double>(frames));
-    int vis_head = 0, vis_shape = 0;
-    for (int c = 0; c < nm; ++c) {
-      const float* q = take.at(f, c);
-      const bool v = std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]);
-      problem.visible[static_cast<size_t>(c)] = v ? 1 : 0;
-      if (v) {
-        problem.obs.col(c) = Eigen::Vector3d(q[0], q[1], q[2]);
-        (c < nh ? vis_head : vis_shape)++;
-      } else {
-        problem.obs.col(c).setZero();
-      }
-    }
-    if (vis_head < std::max(3, options.min_cluster_markers) || vis_shape < std::max(1, options.min_shape_markers)) {
-      have_prev = false;
-      continue;
-    }
-    if (!(options.warm_start && have_prev)) {
-      // Cold start: Kabsch on the head cluster, then the shape parameters
-      // from the visible shape markers taken to the head frame.
-      for (int k = 0; k < nh; ++k) {
-        if (problem.visible[static_cast<size_t>(k)]) {
-          head_obs.col(k) = problem.obs.col(k);
-        } else {
-          head_obs.col(k).setConstant(kNaN);
-        }
-      }
-      const RigidFit fit = EstimateRigidKabsch(prep.reference, head_obs);
-      if (!fit.valid) {
-        have_prev = false;
-        continue;
-      }
-      problem.r0 = fit.transform.rotation;
-      problem.t0 = fit.transform.translation;
-      Eigen::VectorXd coords = Eigen::VectorXd::Zero(3 * ns);
-      std::vector<bool> mask(static_cast<size_t>(3 * ns), false);
-      for (int j = 0; j < ns; ++j) {
-        if (!problem.visible[static_cast<size_t>(nh + j)]) continue;
-        coords.segment<3>(3 * j) = LabToHead(problem.obs.col(nh + j), fit.transform, prep.rest, prep.weights(j));
-        for (int k = 0; k < 3; ++k) mask[static_cast<size_t>(3 * j + k)] = true;
-      }
-      prev_p = np > 0 ? model.shape.Estimate(coords, mask) : Eigen::VectorXd();
-      if (!prev_p.allFinite()) prev_p.setZero();
-    }
-    x.head<6>().setZero();
-    x.tail(np) = prev_p;
-    const auto& summary = solver.Solve(problem, &x);
-
-    Eigen::Matrix3d e;
-    ExpAndLeftJacobian(x.head<3>(), &e, nullptr);
-    RigidTransform pose;
-    pose.rotation = e * problem.r0;
-    pose.translation = problem.t0 + x.segment<3>(3);
-    const Eigen::VectorXd p = x.tail(np);
-    if (!pose.rotation.allFinite() || !pose.translation.allFinite() || !p.allFinite()) {
-      have_prev = false;
-      continue;
-    }
-    // Re-orthonormalise so rounding does not accumulate across warm starts.
-    {
-      const Eigen::Quaterniond qn(pose.rotation);
-      pose.rotation = qn.normalized().toRotationMatrix();
-    }
-    out.solved[static_cast<size_t>(f)] = 1;
-    out.converged[static_cast<size_t>(f)] =
-        summary.status != ceres::TinySolver<FrameProblem>::HIT_MAX_ITERATIONS ? 1 : 0;
-    out.pose.row(f) = pose.Parameters().transpose();
-    out.params.row(f) = p.transpose();
-
-    // Reconstruct all model markers.
-    lab.leftCols(nh) = (pose.rotation * prep.reference).colwise() + pose.translation;
-    const Eigen::VectorXd xh = prep.mean + prep.loadings * p;
-    const Eigen::VectorXd xr = prep.rest_mean + prep.rest_loadings * p;
-    for (int j = 0; j < ns; ++j) {
-      const double w = prep.weights(j);
-      lab.col(nh + j) = w * (pose.rotation * xh.segment<3>(3 * j) + pose.translation) + xr.segment<3>(3 * j);
-    }
-    for (int c = 0; c < nm; ++c) {
-      float* q = out.reconstructed.at(f, c);
-      for (int k = 0; k < 3; ++k) q[k] = static_cast<float>(lab(k, c));
-      if (problem.visible[static_cast<size_t>(c)]) out.error_mm(f, c) = (lab.col(c) - problem.obs.col(c)).norm();
-    }
-    problem.r0 = pose.rotation;
-    problem.t0 = pose.translation;
-    prev_p = p;
-    have_prev = true;
+  switch (np) {
+#define CSW_FACE_CASE(P) \
+  case P:                \
+    SolveFrames<6 + P>(model, prep, take, options, progress, out); \
+    break;
+    CSW_FACE_CASE(1)
+    CSW_FACE_CASE(2)
+    CSW_FACE_CASE(3)
+    CSW_FACE_CASE(4)
+    CSW_FACE_CASE(5)
+    CSW_FACE_CASE(6)
+    CSW_FACE_CASE(7)
+    CSW_FACE_CASE(8)
+    CSW_FACE_CASE(9)
+    CSW_FACE_CASE(10)
+#undef CSW_FACE_CASE
+    default:
+      SolveFrames<Eigen::Dynamic>(model, prep, take, options, progress, out);
   }
   if (progress) progress->Update("invert face", 1.0);
   return out;
