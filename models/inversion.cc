@@ -65,3 +65,67 @@ Eigen::MatrixXd MarkerDistances(const MarkerArray& a, const MarkerArray& b) {
 }
 
 }  // namespace csw
+
+namespace csw {
+
+int64_t CorrectGapsWithEdgeResiduals(const MarkerArray& input, InversionResult* result, int64_t fade_frames) {
+  MarkerArray& rec = result->reconstructed;
+  if (input.frames() != rec.frames() || input.markers() != rec.markers()) {
+    throw InvalidInput("gap correction: input is " + std::to_string(input.frames()) + "×" +
+                       std::to_string(input.markers()) + " markers, the reconstruction " +
+                       std::to_string(rec.frames()) + "×" + std::to_string(rec.markers()));
+  }
+  const int64_t frames = input.frames();
+  int64_t corrected = 0;
+  // Mean misfit over up to kEdgeFrames visible, reconstructed samples from
+  // frame f outwards (step −1 or +1), or nothing. Averaging keeps the marker
+  // noise of one sample from being copied into the whole gap.
+  constexpr int kEdgeFrames = 8;
+  auto misfit = [&](int64_t f, int64_t m, int step, Eigen::Vector3d* out) {
+    out->setZero();
+    int n = 0;
+    for (; n < kEdgeFrames && f >= 0 && f < frames && input.Visible(f, m) && !IsMissing(rec.at(f, m)[0]);
+         ++n, f += step) {
+      for (int k = 0; k < 3; ++k) (*out)(k) += double(input.at(f, m)[k]) - double(rec.at(f, m)[k]);
+    }
+    if (n == 0) return false;
+    *out /= n;
+    return true;
+  };
+  for (int64_t m = 0; m < input.markers(); ++m) {
+    int64_t f = 0;
+    while (f < frames) {
+      if (input.Visible(f, m)) {
+        ++f;
+        continue;
+      }
+      const int64_t a = f;
+      while (f < frames && !input.Visible(f, m)) ++f;
+      const int64_t b = f;  // run [a, b)
+      Eigen::Vector3d left, right;
+      const bool has_left = misfit(a - 1, m, -1, &left), has_right = misfit(b, m, +1, &right);
+      if (!has_left && !has_right) continue;
+      const double span = static_cast<double>(b - a + 1);
+      for (int64_t g = a; g < b; ++g) {
+        float* p = rec.at(g, m);
+        if (IsMissing(p[0])) continue;
+        Eigen::Vector3d add;
+        if (has_left && has_right) {
+          const double t = static_cast<double>(g - a + 1) / span;
+          add = (1 - t) * left + t * right;
+        } else {
+          const int64_t distance = has_left ? g - a + 1 : b - g;
+          const double w = fade_frames > 0 ? std::max(0.0, 1.0 - static_cast<double>(distance) /
+                                                                   static_cast<double>(fade_frames))
+                                           : 1.0;
+          add = w * (has_left ? left : right);
+        }
+        for (int k = 0; k < 3; ++k) p[k] = static_cast<float>(p[k] + add(k));
+        ++corrected;
+      }
+    }
+  }
+  return corrected;
+}
+
+}  // namespace csw

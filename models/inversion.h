@@ -63,3 +63,19 @@ ErrorStats SummariseErrors(const Eigen::MatrixXd& error_mm, const std::vector<in
 Eigen::MatrixXd MarkerDistances(const MarkerArray& a, const MarkerArray& b);
 
 }  // namespace csw
+
+namespace csw {
+
+// Temporal correction of the reconstruction inside gaps. The model's misfit
+// (observed − reconstructed) of a marker changes slowly: it is the part of the
+// posture or articulation the model's few parameters do not capture. For every
+// run of frames where a marker is missing from `input` but reconstructed, the
+// misfit just before the run and just after it (each the mean over up to 8
+// visible frames, so one sample's noise is not copied) is interpolated
+// linearly across the run and added to the reconstruction (one
+// edge only: that edge's misfit, fading linearly to zero over fade_frames).
+// Returns the number of samples corrected. Throws InvalidInput on a shape
+// mismatch.
+int64_t CorrectGapsWithEdgeResiduals(const MarkerArray& input, InversionResult* result, int64_t fade_frames = 60);
+
+}  // namespace csw

@@ -124,3 +124,34 @@ TEST(Inversion, MarkerDistancesKnownValues) {
 
 }  // namespace
 }  // namespace csw
+
+namespace csw {
+namespace {
+
+TEST(Inversion, GapEdgeResidualsAreInterpolatedAcrossGaps) {
+  // One marker, 10 frames; the model misses by (1, 0, 0) before a gap and by
+  // (3, 0, 0) after it: inside, the correction goes linearly from 1 to 3.
+  MarkerArray input(10, 1);
+  InversionResult r;
+  r.reconstructed = MarkerArray(10, 1);
+  for (int f = 0; f < 10; ++f) {
+    float* rec = r.reconstructed.at(f, 0);
+    rec[0] = rec[1] = rec[2] = 0.0f;
+    float* in = input.at(f, 0);
+    in[0] = f < 5 ? 1.0f : 3.0f;
+    in[1] = in[2] = 0.0f;
+  }
+  for (int f = 3; f < 6; ++f) input.SetMissing(f, 0);  // gap [3, 6): edges at 2 (misfit 1) and 6 (misfit 3)
+  input.SetMissing(9, 0);                             // trailing gap: one edge (misfit 3 at frame 8)
+  EXPECT_EQ(CorrectGapsWithEdgeResiduals(input, &r, 4), 4);
+  EXPECT_FLOAT_EQ(r.reconstructed.at(3, 0)[0], 1.5f);
+  EXPECT_FLOAT_EQ(r.reconstructed.at(4, 0)[0], 2.0f);
+  EXPECT_FLOAT_EQ(r.reconstructed.at(5, 0)[0], 2.5f);
+  EXPECT_FLOAT_EQ(r.reconstructed.at(9, 0)[0], 3.0f * 0.75f);  // fades over 4 frames
+  EXPECT_FLOAT_EQ(r.reconstructed.at(2, 0)[0], 0.0f);          // visible samples untouched
+  EXPECT_FLOAT_EQ(r.reconstructed.at(4, 0)[1], 0.0f);
+  EXPECT_THROW(CorrectGapsWithEdgeResiduals(MarkerArray(9, 1), &r), InvalidInput);
+}
+
+}  // namespace
+}  // namespace csw

@@ -228,6 +228,9 @@ class InvertCommand : public Command {
                      "Folder with <take>.clean.c3d (e.g. from csw simulate --clean): score occluded samples "
                      "and cluster poses against it");
     sub_->add_option("--figures", options_.figures, "Folder for PNG and SVG figures");
+    sub_->add_flag("!--no-edge-correction", options_.edge_correction,
+                   "Reconstruct missing samples from the model alone, without adding the model's misfit "
+                   "interpolated from the gap's edges");
     sub_->add_option("--threads", options_.threads, "Takes inverted in parallel (0 = all cores)")
         ->capture_default_str();
     sub_->add_option("--prior", options_.inversion.prior_mm,

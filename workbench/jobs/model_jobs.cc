@@ -131,6 +131,16 @@ ParseError ConfigError(const std::string& file, const std::string& what) {
   return ParseError(Location{file, std::nullopt, std::nullopt}, what);
 }
 
+// Sets where a model came from, keeping its fit statistics (training frames,
+// residual), which inversion uses (e.g. the hand's forearm weighting).
+void WithProvenance(const ModelInfo& from, ModelInfo* to) {
+  to->corpus = from.corpus;
+  to->training_takes = from.training_takes;
+  to->config_json = from.config_json;
+  to->created_utc = from.created_utc;
+  to->csw_version = from.csw_version;
+}
+
 void CheckKeys(const json& obj, const std::set<std::string>& allowed, const std::string& file,
                const std::string& where) {
   if (!obj.is_object()) throw ConfigError(file, where + " must be a JSON object");
@@ -529,8 +539,7 @@ json Fit(const FitOptions& options, Progress& progress) {
     json models = json::array();
     auto fit_cluster = [&](const std::string& name, const std::vector<std::string>& markers) {
       RigidModel m = FitRigidModel(name, markers, load(markers), config.rigid, &progress);
-      m.info = ModelInfo{info.corpus, info.training_takes, info.config_json, info.created_utc, info.csw_version,
-                         m.info.training_frames, m.info.selected_frames, m.info.training_rms_mm};
+      WithProvenance(info, &m.info);
       std::vector<double> ev(m.motion.explained_fraction.data(),
                              m.motion.explained_fraction.data() + m.motion.explained_fraction.size());
       models.push_back({{"name", name},
@@ -559,9 +568,8 @@ json Fit(const FitOptions& options, Progress& progress) {
     names.insert(names.end(), layout.face.begin(), layout.face.end());
     names.insert(names.end(), layout.throat.begin(), layout.throat.end());
     FaceModel m = FitFaceModel(layout, load(names), fo, &progress);
-    m.info = ModelInfo{info.corpus, info.training_takes, info.config_json, info.created_utc, info.csw_version,
-                       m.info.training_frames, m.info.selected_frames, m.info.training_rms_mm};
-    m.head.info = m.info;
+    WithProvenance(info, &m.info);
+    WithProvenance(info, &m.head.info);
     json throat = json::array();
     for (size_t i = 0; i < layout.throat.size(); ++i) {
       throat.push_back({{"marker", layout.throat[i]},
@@ -612,9 +620,8 @@ json Fit(const FitOptions& options, Progress& progress) {
     std::vector<std::string> names = layout.forearm;
     names.insert(names.end(), layout.hand.begin(), layout.hand.end());
     HandModel m = FitHandModel(layout, load(names), ho, &progress);
-    m.info = ModelInfo{info.corpus, info.training_takes, info.config_json, info.created_utc, info.csw_version,
-                       m.info.training_frames, m.info.selected_frames, m.info.training_rms_mm};
-    m.forearm.info = m.info;
+    WithProvenance(info, &m.info);
+    WithProvenance(info, &m.forearm.info);
     summary["hand"] = {{"parameters", m.num_parameters()},
                        {"angles", m.angle_names.size()},
                        {"variance_explained", m.shape.angle_pca.variance_explained},
@@ -741,6 +748,7 @@ struct TakeJob {
   std::vector<std::pair<int64_t, int>> hidden;  // (frame, column) hidden on purpose
   MarkerArray truth;     // clean markers (model order), empty when none
   InversionResult result;
+  MarkerArray model_only;  // reconstruction before the gap correction
   std::string role;
   std::atomic<double> fraction{0};
   std::exception_ptr error;
@@ -863,6 +871,8 @@ json Invert(const InvertOptions& options, Progress& progress) {
         });
         job.result = job.run->face ? InvertFace(*job.run->face, job.input, options.inversion, &child)
                                    : InvertHand(*job.run->hand, job.input, options.inversion, &child);
+        job.model_only = job.result.reconstructed;
+        if (options.edge_correction) CorrectGapsWithEdgeResiduals(job.input, &job.result);
         job.fraction.store(1.0);
       } catch (...) {
         job.error = std::current_exception();
@@ -897,7 +907,8 @@ json Invert(const InvertOptions& options, Progress& progress) {
   summary["figures"] = json::array();
   for (const auto& run : runs) {
     json takes = json::array();
-    std::map<std::string, Accumulator> visible_by_role, hidden_by_role, occluded_by_role;
+    std::map<std::string, Accumulator> visible_by_role, hidden_by_role, occluded_by_role, hidden_model_by_role,
+        occluded_model_by_role;
     Accumulator rot_err, trans_err;
 #ifdef CSW_HAVE_REPORT
     std::vector<report::ErrorBar> bars;
@@ -907,15 +918,19 @@ json Invert(const InvertOptions& options, Progress& progress) {
       if (job.run != run.get()) continue;
       const InversionResult& res = job.result;
       const int nm = static_cast<int>(run->names.size());
-      Accumulator visible, hidden, occluded, rot, trans;
+      Accumulator visible, hidden, occluded, hidden_model, occluded_model, rot, trans;
+      auto distance = [](const float* a, const float* b) {
+        return std::sqrt(std::pow(double(a[0]) - b[0], 2) + std::pow(double(a[1]) - b[1], 2) +
+                         std::pow(double(a[2]) - b[2], 2));
+      };
       for (int64_t f = 0; f < res.frames(); ++f)
         for (int c = run->cluster; c < nm; ++c) visible.Add(res.error_mm(f, c));
       for (const auto& [f, c] : job.hidden) {
         const float* r = res.reconstructed.at(f, c);
         const float* o = job.original.at(f, c);
         if (IsMissing(r[0])) continue;
-        hidden.Add(std::sqrt(std::pow(double(r[0]) - o[0], 2) + std::pow(double(r[1]) - o[1], 2) +
-                             std::pow(double(r[2]) - o[2], 2)));
+        hidden.Add(distance(r, o));
+        hidden_model.Add(distance(job.model_only.at(f, c), o));
       }
       if (!job.truth.empty()) {
         for (int64_t f = 0; f < res.frames(); ++f) {
@@ -923,8 +938,8 @@ json Invert(const InvertOptions& options, Progress& progress) {
             const float* r = res.reconstructed.at(f, c);
             const float* t = job.truth.at(f, c);
             if (job.original.Visible(f, c) || IsMissing(r[0]) || IsMissing(t[0])) continue;
-            occluded.Add(std::sqrt(std::pow(double(r[0]) - t[0], 2) + std::pow(double(r[1]) - t[1], 2) +
-                                   std::pow(double(r[2]) - t[2], 2)));
+            occluded.Add(distance(r, t));
+            occluded_model.Add(distance(job.model_only.at(f, c), t));
           }
           if (!res.solved[static_cast<size_t>(f)]) continue;
           Eigen::Matrix3Xd obs(3, run->cluster);
@@ -944,15 +959,21 @@ json Invert(const InvertOptions& options, Progress& progress) {
                 {"solved_frames", solved},
                 {"role", job.role},
                 {"visible", visible.Json()}};
-      if (!job.hidden.empty()) t["hidden"] = hidden.Json();
+      if (!job.hidden.empty()) {
+        t["hidden"] = hidden.Json();
+        t["hidden_model"] = hidden_model.Json();
+      }
       if (!job.truth.empty()) {
         t["occluded"] = occluded.Json();
+        t["occluded_model"] = occluded_model.Json();
         t["pose"] = {{"rotation_deg", rot.Json("deg")}, {"translation_mm", trans.Json()}};
       }
       takes.push_back(t);
       visible_by_role[job.role].Merge(visible);
       hidden_by_role[job.role].Merge(hidden);
       occluded_by_role[job.role].Merge(occluded);
+      hidden_model_by_role[job.role].Merge(hidden_model);
+      occluded_model_by_role[job.role].Merge(occluded_model);
       rot_err.Merge(rot);
       trans_err.Merge(trans);
 #ifdef CSW_HAVE_REPORT
@@ -962,22 +983,31 @@ json Invert(const InvertOptions& options, Progress& progress) {
     json m = {{"takes", takes}, {"target_mm", run->target_mm}};
     for (const char* role : {"training", "held_out"}) {
       json r = {{"visible", visible_by_role[role].Json()}};
-      if (options.hide_fraction > 0) r["hidden"] = hidden_by_role[role].Json();
-      if (!options.truth.empty()) r["occluded"] = occluded_by_role[role].Json();
+      if (options.hide_fraction > 0) {
+        r["hidden"] = hidden_by_role[role].Json();
+        r["hidden_model"] = hidden_model_by_role[role].Json();
+      }
+      if (!options.truth.empty()) {
+        r["occluded"] = occluded_by_role[role].Json();
+        r["occluded_model"] = occluded_model_by_role[role].Json();
+      }
       m[role] = r;
     }
     Accumulator all_visible;
     for (const auto& [k, v] : visible_by_role) all_visible.Merge(v);
     m["overall"] = {{"visible", all_visible.Json()}};
+    auto pooled = [](const std::map<std::string, Accumulator>& by_role) {
+      Accumulator a;
+      for (const auto& [k, v] : by_role) a.Merge(v);
+      return a.Json();
+    };
     if (options.hide_fraction > 0) {
-      Accumulator h;
-      for (const auto& [k, v] : hidden_by_role) h.Merge(v);
-      m["overall"]["hidden"] = h.Json();
+      m["overall"]["hidden"] = pooled(hidden_by_role);
+      m["overall"]["hidden_model"] = pooled(hidden_model_by_role);
     }
     if (!options.truth.empty()) {
-      Accumulator o;
-      for (const auto& [k, v] : occluded_by_role) o.Merge(v);
-      m["overall"]["occluded"] = o.Json();
+      m["overall"]["occluded"] = pooled(occluded_by_role);
+      m["overall"]["occluded_model"] = pooled(occluded_model_by_role);
       m["overall"]["pose"] = {{"rotation_deg", rot_err.Json("deg")}, {"translation_mm", trans_err.Json()}};
     }
 #ifdef CSW_HAVE_REPORT
@@ -1070,8 +1100,12 @@ std::string InvertText(const json& s) {
       const json& r = m[role];
       if (r["visible"].value("count", 0) == 0) continue;
       o << "  " << role << ": visible " << stats(r["visible"]);
-      if (r.contains("hidden")) o << "; hidden " << stats(r["hidden"]);
-      if (r.contains("occluded")) o << "; occluded " << stats(r["occluded"]);
+      if (r.contains("hidden")) {
+        o << "; hidden " << stats(r["hidden"]) << " (model alone " << stats(r["hidden_model"]) << ")";
+      }
+      if (r.contains("occluded")) {
+        o << "; occluded " << stats(r["occluded"]) << " (model alone " << stats(r["occluded_model"]) << ")";
+      }
       o << "\n";
     }
     if (m["overall"].contains("pose")) {

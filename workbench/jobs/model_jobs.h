@@ -54,6 +54,9 @@ struct InvertOptions {
   std::string truth;               // folder with <take>.clean.c3d: score occluded samples and poses
   std::string figures;             // folder for PNG + SVG figures
   int threads = 0;                 // takes inverted in parallel (0 = hardware threads)
+  // Add the model's misfit at the edges of each gap, interpolated across it, to
+  // the reconstruction of missing samples (CorrectGapsWithEdgeResiduals).
+  bool edge_correction = true;
   InversionOptions inversion;
   std::string Check() const;
 };

@@ -241,13 +241,27 @@ class RawFile {
   std::string StringAttr(const std::string& obj, const std::string& name) {
     hid_t a = H5Aopen_by_name(id_, obj.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
     EXPECT_GE(a, 0) << obj << " " << name;
-    hid_t t = H5Tcopy(H5T_C_S1);
-    H5Tset_size(t, H5T_VARIABLE);
-    char* p = nullptr;
-    H5Aread(a, t, &p);
-    std::string s = p != nullptr ? p : "";
-    H5free_memory(p);
+    // Read as stored (h5py writes variable-length UTF-8; csw may write fixed
+    // length): a memory type of the same size class and character set.
+    const hid_t ft = H5Aget_type(a);
+    const hid_t t = H5Tcopy(H5T_C_S1);
+    H5Tset_cset(t, H5Tget_cset(ft));
+    std::string s;
+    if (H5Tis_variable_str(ft) > 0) {
+      H5Tset_size(t, H5T_VARIABLE);
+      char* p = nullptr;
+      EXPECT_GE(H5Aread(a, t, &p), 0) << obj << " " << name;
+      s = p != nullptr ? p : "";
+      H5free_memory(p);
+    } else {
+      const size_t n = H5Tget_size(ft);
+      H5Tset_size(t, n);
+      std::string buf(n, '\0');
+      EXPECT_GE(H5Aread(a, t, buf.data()), 0) << obj << " " << name;
+      s = buf.c_str();
+    }
     H5Tclose(t);
+    H5Tclose(ft);
     H5Aclose(a);
     return s;
   }
