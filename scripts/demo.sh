@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # The main job on the embedded demo corpus, from a fresh Debian 12 machine (as root):
 # installs missing packages, builds csw (Release), imports the demo corpus
-# (datasets/demo, made by the virtual cuer) into out/demo/corpus.h5 and prints
-# `csw info` of it. Regenerate the demo corpus with:
+# (datasets/demo, made by the virtual cuer) into out/demo/corpus.h5, prints
+# `csw info` of it, fits the face and hand models on the first third of the
+# sentences (out/demo/models.h5), inverts them on every sentence, fills the gaps
+# as new takes and writes the figures to out/demo/figures. Regenerate the demo
+# corpus with:
 #   csw simulate demo --seed 1 -o datasets/demo
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,3 +29,14 @@ for part in shapes visemes sentences; do
 done
 echo "== csw info out/demo/corpus.h5"
 "$csw" info out/demo/corpus.h5
+sentences=$(cd "$demo/sentences" && ls sentence_*.c3d | sed 's/\.c3d$//')
+train=$(echo "$sentences" | head -n $(( $(echo "$sentences" | wc -l) / 3 )) | paste -sd, -)
+all=$(echo "$sentences" | paste -sd, -)
+rm -f out/demo/models.h5
+echo "== csw fit face / hand on the first third of the sentences: $train"
+"$csw" fit face out/demo/corpus.h5 --train "$train" --config datasets/configs/virtual-cuer.json \
+  -o out/demo/models.h5 --figures out/demo/figures
+"$csw" fit hand out/demo/corpus.h5 --train "$train" --config datasets/configs/virtual-cuer.json \
+  -o out/demo/models.h5 --figures out/demo/figures
+echo "== csw invert on every sentence, filling the gaps into <take>.filled"
+"$csw" invert out/demo/corpus.h5 --models out/demo/models.h5 --takes "$all" --fill --figures out/demo/figures
