@@ -645,18 +645,6 @@ Handle CreateCorpusFile(const std::string& file, const Where& where) {
   return f;
 }
 
-void FsyncPath(const std::string& p, bool directory, const std::string& corpus) {
-  int fd = ::open(p.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
-  if (fd < 0) throw IoError(corpus, "cannot open " + p + " to sync it: " + Errno());
-  int r = ::fsync(fd);
-  int saved = errno;
-  ::close(fd);
-  if (r != 0 && !(directory && (saved == EINVAL || saved == EROFS))) {
-    errno = saved;
-    throw IoError(corpus, "cannot sync " + p + ": " + Errno());
-  }
-}
-
 std::string LockPath(const std::string& corpus_path) {
   fs::path p(corpus_path);
   return (p.parent_path() / ("." + p.filename().string() + ".csw-lock")).string();
@@ -890,13 +878,13 @@ void CorpusTransaction::Commit() {
   } else if (!t.file.Reset()) {
     throw IoError(t.path, "cannot close " + t.temp + ": " + h5::TakeErrorMessage());
   }
-  FsyncPath(t.temp, false, t.path);
+  h5::FsyncPath(t.temp, false, t.path);
   if (::rename(t.temp.c_str(), t.path.c_str()) != 0) {
     throw IoError(t.path, "cannot rename " + t.temp + " over the corpus: " + Errno());
   }
   t.committed = true;
   fs::path dir = fs::path(t.path).parent_path();
-  FsyncPath(dir.empty() ? std::string(".") : dir.string(), true, t.path);
+  h5::FsyncPath(dir.empty() ? std::string(".") : dir.string(), true, t.path);
 }
 
 // ---------------------------------------------------------------------------

@@ -1,5 +1,9 @@
 #include "io/corpus/hdf5_util.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstring>
 
 #include "core/error.h"
@@ -357,6 +361,17 @@ std::vector<double> ReadDoubles(hid_t loc, const std::string& name, const Where&
           object);
   }
   return out;
+}
+
+void FsyncPath(const std::string& p, bool directory, const std::string& target) {
+  const int fd = ::open(p.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
+  if (fd < 0) throw IoError(target, "cannot open " + p + " to sync it: " + std::strerror(errno));
+  const int r = ::fsync(fd);
+  const int saved = errno;
+  ::close(fd);
+  if (r != 0 && !(directory && (saved == EINVAL || saved == EROFS))) {
+    throw IoError(target, "cannot sync " + p + ": " + std::strerror(saved));
+  }
 }
 
 }  // namespace csw::h5

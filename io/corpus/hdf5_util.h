@@ -99,4 +99,9 @@ std::vector<double> ReadDoubles(hid_t loc, const std::string& name, const Where&
 // Variable-length UTF-8 string type.
 Handle Utf8StringType(const Where& where);
 
+// Flushes a file (or, with directory, a folder's entries) to disk; IoError
+// naming `target` (the corpus or model file being saved) on failure. A folder
+// that cannot be synced (EINVAL/EROFS on some file systems) is not an error.
+void FsyncPath(const std::string& path, bool directory, const std::string& target);
+
 }  // namespace csw::h5

@@ -859,18 +859,6 @@ void RefuseToClobber(const std::string& path) {
   }
 }
 
-void FsyncPath(const std::string& p, bool directory, const std::string& target) {
-  int fd = ::open(p.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
-  if (fd < 0) throw IoError(target, "cannot open " + p + " to sync it: " + Errno());
-  int r = ::fsync(fd);
-  int saved = errno;
-  ::close(fd);
-  if (r != 0 && !(directory && (saved == EINVAL || saved == EROFS))) {
-    errno = saved;
-    throw IoError(target, "cannot sync " + p + ": " + Errno());
-  }
-}
-
 // Removes the temporary file unless the save went through.
 struct TempFile {
   std::string path;
@@ -927,13 +915,13 @@ void SaveModelFile(const std::string& path, const ModelFile& models) {
     h5::Check(H5Fflush(f, H5F_SCOPE_GLOBAL), where, "cannot flush", temp.path);
     if (!file.Reset()) throw IoError(path, "cannot close " + temp.path + ": " + h5::TakeErrorMessage());
   }
-  FsyncPath(temp.path, false, path);
+  h5::FsyncPath(temp.path, false, path);
   if (::rename(temp.path.c_str(), path.c_str()) != 0) {
     throw IoError(path, "cannot rename " + temp.path + " over the model file: " + Errno());
   }
   temp.keep = true;
   fs::path dir = fs::path(path).parent_path();
-  FsyncPath(dir.empty() ? std::string(".") : dir.string(), true, path);
+  h5::FsyncPath(dir.empty() ? std::string(".") : dir.string(), true, path);
 }
 
 void UpdateModelFile(const std::string& path, const ModelFile& update) {
