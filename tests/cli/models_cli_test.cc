@@ -3,12 +3,20 @@
 // c3d.org (hidden samples), gap filling as a new take, and clear errors.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <thread>
 
 #include "core/sha256.h"
 #include "io/corpus/corpus.h"
@@ -106,6 +114,34 @@ TEST(CliModels, VirtualCuerAcceptance) {
     EXPECT_LE(Mean(m["overall"]["pose"]["translation_mm"]), 0.5);
     for (const auto& t : m["takes"]) EXPECT_EQ(t["solved_frames"], t["frames"]) << t["take"];
   }
+
+  // Ctrl-C during a filling inversion: exit 130, the corpus byte-identical.
+  const std::string before = Sha256OfFile(corpus.string());
+  const fs::path err = dir / "cancel.err";
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, 2);
+    execl(CSW_BINARY, CSW_BINARY, "invert", corpus.c_str(), "--models", models.c_str(), "--fill", "--threads", "1",
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  bool inverting = false;
+  for (int i = 0; i < 4000 && !inverting; ++i) {
+    std::ifstream in(err);
+    std::stringstream text;
+    text << in.rdbuf();
+    inverting = text.str().find("inverting: 10%") != std::string::npos;
+    if (!inverting) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(inverting) << "the inversion never reported progress";
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_EQ(Sha256OfFile(corpus.string()), before);
 }
 
 // Real data the project did not make: remove head motion, fit ≤ 10 face
