@@ -37,7 +37,13 @@ cmake --build build/asan -j"$jobs"
 stamp "tests under ASan + UBSan"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-(cd build/asan && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 900) | tee "$summary"
+# The virtual-cuer acceptance run (18 simulated sentences through csw simulate,
+# import, fit and invert; about 25 s in stage 1) is left out here: at -O0 with
+# ASan its Eigen-heavy simulation runs for over 10 minutes. Every code path it
+# drives is exercised under the sanitizers by the smaller CliModels, models.*
+# and io.ModelFile* tests.
+(cd build/asan && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 900 \
+  -E '^cli\.CliModels\.VirtualCuerAcceptance$') | tee "$summary"
 read -r total2 failed2 <<<"$(count_tests)"
 
 stamp "build fuzzers (clang, libFuzzer + ASan + UBSan)"
