@@ -9,7 +9,7 @@ pkgs=(
   libespeak-ng-dev espeak-ng-data libsndfile1-dev sox
   nlohmann-json3-dev libssl-dev libpugixml-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  qt6-base-dev qt6-base-dev-tools libqt6svg6-dev qt6-multimedia-dev
+  qt6-base-dev qt6-base-dev-tools qt6-svg-dev qt6-multimedia-dev
   libqcustomplot-dev libqcustomplot2.1-qt6 libgl-dev
   clang libclang-rt-14-dev
   praat xvfb
