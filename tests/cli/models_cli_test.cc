@@ -113,6 +113,20 @@ TEST(CliModels, VirtualCuerAcceptance) {
     EXPECT_LE(m["overall"]["pose"]["rotation_deg"]["mean_deg"].get<double>(), 0.5);
     EXPECT_LE(Mean(m["overall"]["pose"]["translation_mm"]), 0.5);
     for (const auto& t : m["takes"]) EXPECT_EQ(t["solved_frames"], t["frames"]) << t["take"];
+    // The per-marker breakdown pools the same samples: shape markers' counts
+    // add up to the totals, and their count-weighted means to the overall mean.
+    int64_t visible_count = 0, occluded_count = 0;
+    double occluded_sum = 0;
+    for (const auto& e : m["markers"]) {
+      if (e["role"] != "shape") continue;
+      visible_count += e["visible"]["count"].get<int64_t>();
+      const int64_t n = e["occluded"]["count"].get<int64_t>();
+      occluded_count += n;
+      if (n > 0) occluded_sum += static_cast<double>(n) * Mean(e["occluded"]);
+    }
+    EXPECT_EQ(visible_count, m["overall"]["visible"]["count"].get<int64_t>());
+    EXPECT_EQ(occluded_count, m["overall"]["occluded"]["count"].get<int64_t>());
+    EXPECT_NEAR(occluded_sum / static_cast<double>(occluded_count), Mean(m["overall"]["occluded"]), 1e-6);
   }
 
   // Ctrl-C during a filling inversion: exit 130, the corpus byte-identical.

@@ -910,6 +910,9 @@ json Invert(const InvertOptions& options, Progress& progress) {
     std::map<std::string, Accumulator> visible_by_role, hidden_by_role, occluded_by_role, hidden_model_by_role,
         occluded_model_by_role;
     Accumulator rot_err, trans_err;
+    // Per model marker (cluster markers included), pooled over takes.
+    const size_t n_markers = run->names.size();
+    std::vector<Accumulator> marker_visible(n_markers), marker_hidden(n_markers), marker_occluded(n_markers);
 #ifdef CSW_HAVE_REPORT
     std::vector<report::ErrorBar> bars;
 #endif
@@ -923,13 +926,16 @@ json Invert(const InvertOptions& options, Progress& progress) {
         return std::sqrt(std::pow(double(a[0]) - b[0], 2) + std::pow(double(a[1]) - b[1], 2) +
                          std::pow(double(a[2]) - b[2], 2));
       };
-      for (int64_t f = 0; f < res.frames(); ++f)
+      for (int64_t f = 0; f < res.frames(); ++f) {
+        for (int c = 0; c < nm; ++c) marker_visible[static_cast<size_t>(c)].Add(res.error_mm(f, c));
         for (int c = run->cluster; c < nm; ++c) visible.Add(res.error_mm(f, c));
+      }
       for (const auto& [f, c] : job.hidden) {
         const float* r = res.reconstructed.at(f, c);
         const float* o = job.original.at(f, c);
         if (IsMissing(r[0])) continue;
         hidden.Add(distance(r, o));
+        marker_hidden[static_cast<size_t>(c)].Add(distance(r, o));
         hidden_model.Add(distance(job.model_only.at(f, c), o));
       }
       if (!job.truth.empty()) {
@@ -939,6 +945,7 @@ json Invert(const InvertOptions& options, Progress& progress) {
             const float* t = job.truth.at(f, c);
             if (job.original.Visible(f, c) || IsMissing(r[0]) || IsMissing(t[0])) continue;
             occluded.Add(distance(r, t));
+            marker_occluded[static_cast<size_t>(c)].Add(distance(r, t));
             occluded_model.Add(distance(job.model_only.at(f, c), t));
           }
           if (!res.solved[static_cast<size_t>(f)]) continue;
@@ -981,6 +988,16 @@ json Invert(const InvertOptions& options, Progress& progress) {
 #endif
     }
     json m = {{"takes", takes}, {"target_mm", run->target_mm}};
+    json per_marker = json::array();
+    for (size_t c = 0; c < n_markers; ++c) {
+      json e = {{"marker", run->names[c]},
+                {"role", static_cast<int>(c) < run->cluster ? "cluster" : "shape"},
+                {"visible", marker_visible[c].Json()}};
+      if (options.hide_fraction > 0) e["hidden"] = marker_hidden[c].Json();
+      if (!options.truth.empty()) e["occluded"] = marker_occluded[c].Json();
+      per_marker.push_back(e);
+    }
+    m["markers"] = per_marker;
     for (const char* role : {"training", "held_out"}) {
       json r = {{"visible", visible_by_role[role].Json()}};
       if (options.hide_fraction > 0) {
