@@ -591,6 +591,7 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
   for (int c = 0; c < static_cast<int>(nf); ++c) forearm_columns[static_cast<size_t>(c)] = c;
   std::vector<MarkerArray> local_takes;
   int64_t complete = 0;
+  std::vector<Eigen::VectorXd> fill_rows;  // training frames of the Gaussian gap filler
   for (size_t i = 0; i < takes.size(); ++i) {
     if (progress) progress->Update("hand model: forearm frames", static_cast<double>(i) / static_cast<double>(takes.size()));
     const RigidSeries series =
@@ -602,6 +603,29 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
       bool all = true;
       for (int64_t m = 0; m < nh && all; ++m) all = local.Visible(f, m);
       if (all) keep.push_back(f);
+    }
+    if (options.gaussian_fill) {
+      int64_t last = -1;
+      for (int64_t f = 0; f < local.frames(); ++f) {
+        int64_t seen = 0;
+        for (int64_t m = 0; m < nh; ++m) seen += local.Visible(f, m) ? 1 : 0;
+        if (2 * seen < nh) continue;
+        bool moved = last < 0;
+        for (int64_t m = 0; m < nh && !moved; ++m) {
+          if (!local.Visible(f, m) || !local.Visible(last, m)) continue;
+          const float* a = local.at(f, m);
+          const float* b = local.at(last, m);
+          moved = std::hypot(double(a[0]) - b[0], double(a[1]) - b[1], double(a[2]) - b[2]) >= options.min_distance_mm;
+        }
+        if (!moved) continue;
+        last = f;
+        Eigen::VectorXd row(3 * nh);
+        for (int64_t m = 0; m < nh; ++m) {
+          const float* a = local.at(f, m);
+          for (int k = 0; k < 3; ++k) row(3 * m + k) = IsMissing(a[0]) ? kNaN : double(a[k]);
+        }
+        fill_rows.push_back(std::move(row));
+      }
     }
     count = static_cast<int64_t>(keep.size());
     MarkerArray kept(count, nh);
@@ -685,6 +709,12 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
         model.shape.Predict(model.shape.angle_pca.Params(angles.row(r).transpose()));
     sum += (pred - coords.row(r).transpose()).squaredNorm();
   }
+  if (options.gaussian_fill && fill_rows.size() >= 2) {
+    Eigen::MatrixXd data(static_cast<Eigen::Index>(fill_rows.size()), 3 * nh);
+    for (size_t r = 0; r < fill_rows.size(); ++r) data.row(static_cast<Eigen::Index>(r)) = fill_rows[r].transpose();
+    fill_rows.clear();
+    model.fill = FitGaussianFill(data, options.fill, progress);
+  }
   model.info.training_frames = complete;
   model.info.selected_frames = rows;
   model.info.training_rms_mm = std::sqrt(sum / static_cast<double>(rows * nh));
@@ -743,6 +773,15 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
   bool have_prev = false;
   Eigen::Matrix3Xd forearm_obs(3, nf);
   Eigen::Matrix3Xd hand_local(3, nh);
+  std::optional<GaussianFiller> filler;
+  if (options.gaussian_fill && !model.fill.empty()) {
+    if (model.fill.markers() != nh) {
+      throw InvalidInput("hand inversion: the model's gap filler has " + std::to_string(model.fill.markers()) +
+                         " markers, the model " + std::to_string(nh));
+    }
+    filler.emplace(model.fill);
+  }
+  Eigen::Matrix3Xd fill_local(3, nh);
 
   for (int64_t f = 0; f < frames; ++f) {
     if (progress && f % 512 == 0) progress->Update("hand inversion", static_cast<double>(f) / static_cast<double>(frames));
@@ -846,6 +885,24 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
       o[1] = static_cast<float>(lab(1));
       o[2] = static_cast<float>(lab(2));
       if (w.visible[static_cast<size_t>(j)]) out.error_mm(f, j) = (lab - w.obs.col(j)).norm();
+    }
+    if (filler && vis_h < nh) {
+      // Hidden hand markers: the Gaussian filler's conditional mean given the
+      // seen ones, in the solved forearm frame.
+      for (int j = 0; j < nh; ++j) {
+        fill_local.col(j) = w.visible[static_cast<size_t>(nf + j)]
+                                ? Eigen::Vector3d(r.transpose() * (w.obs.col(nf + j) - t))
+                                : Eigen::Vector3d::Constant(kNaN);
+      }
+      filler->Fill(&fill_local);
+      for (int j = 0; j < nh; ++j) {
+        if (w.visible[static_cast<size_t>(nf + j)] || !fill_local.col(j).allFinite()) continue;
+        const Eigen::Vector3d lab = r * fill_local.col(j) + t;
+        float* o = out.reconstructed.at(f, nf + j);
+        o[0] = static_cast<float>(lab(0));
+        o[1] = static_cast<float>(lab(1));
+        o[2] = static_cast<float>(lab(2));
+      }
     }
   }
   if (progress) progress->Update("hand inversion", 1.0);

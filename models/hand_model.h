@@ -41,6 +41,7 @@
 
 #include "core/progress.h"
 #include "core/take.h"
+#include "models/gaussian_fill.h"
 #include "models/hand_regression.h"
 #include "models/inversion.h"
 #include "models/rigid_model.h"
@@ -74,6 +75,13 @@ struct HandModelOptions {
   // total (unweighted) angle variance. false: the seed's plain angle PCA.
   bool weighted_angle_pca = true;
   double min_distance_mm = 2.0;     // training-frame selection
+  // true: also fit HandModel::fill, the Gaussian gap filler of the hand
+  // markers in the forearm frame (gaussian_fill.h), by EM on the training
+  // frames where at least half the hand markers are seen (complete or not),
+  // thinned per take: a frame is kept when a marker seen in it and in the
+  // last kept frame has moved by min_distance_mm.
+  bool gaussian_fill = true;
+  GaussianFillOptions fill;
   HandRegressionOptions regression; // ridge etc. (documented in hand_regression.h)
   RigidModelOptions forearm;        // forearm cluster fit and motion PCA (nmH)
 };
@@ -89,6 +97,11 @@ struct HandModel {
   // Scale of each PCA parameter (its training sd): inversion works on
   // params / scale so that InversionOptions::prior_mm is per unit sd.
   Eigen::VectorXd param_scale;
+  // Gap filler for hidden hand markers (empty = none): InvertHand fills the
+  // markers missing from a frame with their conditional mean given the seen
+  // ones (in the solved forearm frame) instead of the shape model's
+  // prediction, which is only weakly tied to a folded finger's hidden segments.
+  GaussianFill fill;
   ModelInfo info;
 
   int num_parameters() const { return shape.angle_pca.num_parameters(); }

@@ -28,6 +28,9 @@ struct InversionOptions {
   // adds residuals prior_mm · p_k. Keeps frames with few visible markers from
   // running away; 0 disables.
   double prior_mm = 0.05;
+  // Hand: fill markers missing from a frame with the model's Gaussian gap
+  // filler (HandModel::fill) when it has one; false = the shape model's prediction.
+  bool gaussian_fill = true;
   // Frames with fewer visible cluster markers than this, or fewer visible
   // shape markers than min_shape_markers, are not solved (NaN rows).
   int min_cluster_markers = 3;

@@ -311,6 +311,19 @@ void ValidateHand(const HandModel& m, const std::string& object, const Checker& 
   c.Require(std::isfinite(r.rms_residual) && r.rms_residual >= 0, ro,
             "attribute rms_residual is not a finite non-negative number (" + Num(r.rms_residual) + ")");
 
+  if (!m.fill.empty()) {
+    const std::string fo = object + "/gaussian_fill";
+    RequireLength(m.fill.mean.size(), 3 * int64_t{hands}, fo + "/mean", "3 per hand marker", c);
+    RequireFinite(m.fill.mean, fo + "/mean", c);
+    RequireShape(m.fill.covariance, 3 * int64_t{hands}, 3 * int64_t{hands}, fo + "/covariance",
+                 "3 per hand marker, squared", c);
+    RequireFinite(m.fill.covariance, fo + "/covariance", c);
+    c.Require(m.fill.ridge_mm2 >= 0 && std::isfinite(m.fill.ridge_mm2), fo, "attribute ridge_mm2 must be >= 0");
+    for (Eigen::Index i = 0; i < m.fill.covariance.rows(); ++i) {
+      c.Require(m.fill.covariance(i, i) >= 0, fo + "/covariance", "diagonal value " + Num(m.fill.covariance(i, i)) +
+                                                                      " at index " + Str(i) + " is negative");
+    }
+  }
   RequireLength(m.param_scale.size(), k, object + "/param_scale", "one per angle PCA parameter", c);
   RequireFinite(m.param_scale, object + "/param_scale", c);
   for (Eigen::Index i = 0; i < m.param_scale.size(); ++i) {
@@ -483,6 +496,15 @@ void WriteHand(hid_t parent, const HandModel& m, const Where& where) {
   h5::WriteAttr(rg.get(), "rms_residual", r.rms_residual, where, ro);
   WriteMatrix(rg.get(), "coefficients", r.coefficients, where, ro + "/coefficients");
   h5::WriteStrings(rg.get(), "warnings", r.warnings, where, ro + "/warnings");
+  if (!m.fill.empty()) {
+    const std::string fo = object + "/gaussian_fill";
+    Handle fg = h5::CreateGroup(g.get(), "gaussian_fill", where, fo);
+    h5::WriteAttr(fg.get(), "ridge_mm2", m.fill.ridge_mm2, where, fo);
+    h5::WriteAttr(fg.get(), "frames", m.fill.frames, where, fo);
+    h5::WriteAttr(fg.get(), "iterations", int64_t{m.fill.iterations}, where, fo);
+    WriteVector(fg.get(), "mean", m.fill.mean, where, fo + "/mean");
+    WriteMatrix(fg.get(), "covariance", m.fill.covariance, where, fo + "/covariance");
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -765,6 +787,15 @@ HandModel ReadHand(hid_t parent, const Checker& c) {
   r.rms_residual = RequiredDoubleAttr(rg.get(), "rms_residual", ro, c);
   r.coefficients = ReadMatrix(rg.get(), "coefficients", ro + "/coefficients", c);
   r.warnings = ReadStringList(rg.get(), "warnings", ro + "/warnings", c);
+  if (h5::LinkExists(g.get(), "gaussian_fill")) {
+    const std::string fo = object + "/gaussian_fill";
+    Handle fg = OpenGroupChecked(g.get(), "gaussian_fill", fo, c);
+    m.fill.ridge_mm2 = RequiredDoubleAttr(fg.get(), "ridge_mm2", fo, c);
+    m.fill.frames = RequiredIntAttr(fg.get(), "frames", fo, c);
+    m.fill.iterations = static_cast<int>(RequiredIntAttr(fg.get(), "iterations", fo, c));
+    m.fill.mean = ReadVector(fg.get(), "mean", fo + "/mean", c);
+    m.fill.covariance = ReadMatrix(fg.get(), "covariance", fo + "/covariance", c);
+  }
   ValidateHand(m, object, c);
   return m;
 }

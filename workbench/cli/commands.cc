@@ -233,6 +233,9 @@ class InvertCommand : public Command {
                    "interpolated from the gap's edges");
     sub_->add_option("--threads", options_.threads, "Takes inverted in parallel (0 = all cores)")
         ->capture_default_str();
+    sub_->add_flag("!--no-gaussian-fill", options_.inversion.gaussian_fill,
+                   "Hand: reconstruct hidden markers from the shape model, not from the model's Gaussian gap "
+                   "filler (the conditional mean given the seen markers)");
     sub_->add_option("--prior", options_.inversion.prior_mm,
                      "Weight (mm per parameter sd) pulling shape parameters towards the mean")
         ->capture_default_str();

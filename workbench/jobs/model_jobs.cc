@@ -125,6 +125,7 @@ struct ModelConfig {
   // hand
   int angle_components = 12;
   double ridge = 0;
+  bool gaussian_fill = true;
 };
 
 ParseError ConfigError(const std::string& file, const std::string& what) {
@@ -239,7 +240,8 @@ ModelConfig LoadConfig(const std::string& path) {
   }
   if (j.contains("hand")) {
     const json& h = j["hand"];
-    CheckKeys(h, {"angle_components", "ridge"}, path, "hand");
+    CheckKeys(h, {"angle_components", "ridge", "gaussian_fill"}, path, "hand");
+    c.gaussian_fill = Get<bool>(h, "gaussian_fill", true, path, "hand");
     c.angle_components = Get<int>(h, "angle_components", 12, path, "hand");
     c.ridge = Get<double>(h, "ridge", 0.0, path, "hand");
     if (c.angle_components < 1) throw ConfigError(path, "hand.angle_components must be >= 1");
@@ -616,6 +618,7 @@ json Fit(const FitOptions& options, Progress& progress) {
     ho.angle_components = config.angle_components;
     ho.min_distance_mm = config.min_distance_mm;
     ho.regression.ridge = config.ridge;
+    ho.gaussian_fill = config.gaussian_fill;
     ho.forearm = config.rigid;
     std::vector<std::string> names = layout.forearm;
     names.insert(names.end(), layout.hand.begin(), layout.hand.end());
@@ -630,6 +633,9 @@ json Fit(const FitOptions& options, Progress& progress) {
                        {"training_frames", m.info.training_frames},
                        {"selected_frames", m.info.selected_frames},
                        {"training_rms_mm", m.info.training_rms_mm}};
+    if (!m.fill.empty()) {
+      summary["hand"]["gaussian_fill"] = {{"frames", m.fill.frames}, {"iterations", m.fill.iterations}};
+    }
 #ifdef CSW_HAVE_REPORT
     if (!options.figures.empty()) {
       fs::create_directories(options.figures);
@@ -872,7 +878,10 @@ json Invert(const InvertOptions& options, Progress& progress) {
         job.result = job.run->face ? InvertFace(*job.run->face, job.input, options.inversion, &child)
                                    : InvertHand(*job.run->hand, job.input, options.inversion, &child);
         job.model_only = job.result.reconstructed;
-        if (options.edge_correction) CorrectGapsWithEdgeResiduals(job.input, &job.result);
+        // The edge misfit is the shape model's; a hand whose gaps the Gaussian
+        // filler reconstructed (not the shape model) is left as filled.
+        const bool gaussian = job.run->hand && !job.run->hand->fill.empty() && options.inversion.gaussian_fill;
+        if (options.edge_correction && !gaussian) CorrectGapsWithEdgeResiduals(job.input, &job.result);
         job.fraction.store(1.0);
       } catch (...) {
         job.error = std::current_exception();

@@ -131,6 +131,12 @@ HandModel MakeHand() {
   m.shape.regression.warnings = {"cos(index_prox.twist) is constant over the training frames; dropped",
                                  "features are rank-deficient (rank 15 of 17)"};
   m.param_scale = m.shape.angle_pca.variances.cwiseSqrt();
+  const Eigen::MatrixXd l = Filled(44, 21, 5);
+  m.fill.mean = FilledVector(45, 21);
+  m.fill.covariance = l * l.transpose() + 0.25 * Eigen::MatrixXd::Identity(21, 21);
+  m.fill.ridge_mm2 = 0.125;
+  m.fill.frames = 1207;
+  m.fill.iterations = 37;
   m.info = MakeInfo("hand");
   return m;
 }
@@ -485,6 +491,8 @@ TEST(ModelFile, MisShapedOrMissingDatasetIsAParseErrorNamingIt) {
       {"/hand/shape/regression/coefficients", {19 * 21}, {}, "has rank 1, expected 2"},
       {"/hand/shape/regression/coefficients", {17, 21}, {}, "expected (19, 21)"},
       {"/hand/param_scale", {}, {}, "missing dataset"},
+      {"/hand/gaussian_fill/covariance", {20, 21}, {}, "has shape (20, 21), expected (21, 21)"},
+      {"/hand/gaussian_fill/mean", {20}, {}, "has 20 elements, expected 21"},
       {"/hand/param_scale", {3}, {1, 1, 1}, "has 3 elements, expected 4"},
       {"/head_motion/reference", {5, 3}, nan_ref, "non-finite value"},
       {"/head_motion/reference", {5, 2}, {}, "expected (points, 3)"},

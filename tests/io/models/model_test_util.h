@@ -101,6 +101,12 @@ inline void ExpectSameHand(const HandModel& a, const HandModel& b) {
   EXPECT_TRUE(SameDouble(ra.rms_residual, rb.rms_residual));
   EXPECT_EQ(ra.warnings, rb.warnings);
   ExpectSameMatrix(a.param_scale, b.param_scale, "hand.param_scale");
+  EXPECT_EQ(a.fill.empty(), b.fill.empty());
+  ExpectSameMatrix(a.fill.mean, b.fill.mean, "hand.fill.mean");
+  ExpectSameMatrix(a.fill.covariance, b.fill.covariance, "hand.fill.covariance");
+  EXPECT_TRUE(SameDouble(a.fill.ridge_mm2, b.fill.ridge_mm2));
+  EXPECT_EQ(a.fill.frames, b.fill.frames);
+  EXPECT_EQ(a.fill.iterations, b.fill.iterations);
   ExpectSameInfo(a.info, b.info, "hand.info");
 }
 
