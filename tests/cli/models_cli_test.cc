@@ -89,6 +89,10 @@ TEST(CliModels, VirtualCuerAcceptance) {
   EXPECT_LT(weight_error, 0.1);
   const json hand = RunJson("fit hand " + Q(corpus) + train, dir.path());
   ASSERT_TRUE(hand.contains("hand"));
+  // The gap filler also learns from the frames where some hand marker is
+  // hidden: more of them than the shape model's complete frames.
+  ASSERT_TRUE(hand["hand"].contains("gaussian_fill"));
+  EXPECT_GT(hand["hand"]["gaussian_fill"]["frames"].get<int64_t>(), 2 * hand["hand"]["training_frames"].get<int64_t>());
 
   const json inv = RunJson("invert " + Q(corpus) + " --models " + Q(models) + " --truth " + Q(sim), dir.path());
   ASSERT_TRUE(inv.contains("face") && inv.contains("hand"));

@@ -710,6 +710,11 @@ std::string FitText(const json& s) {
     o << "  hand: " << h["parameters"].get<int>() << " parameters from " << h["angles"].get<size_t>() << " angles, "
       << h["selected_frames"].get<int64_t>() << " of " << h["training_frames"].get<int64_t>()
       << " frames selected, training rms " << h["training_rms_mm"].get<double>() << " mm\n";
+    if (h.contains("gaussian_fill")) {
+      o << "  hand gap filler: Gaussian, " << h["gaussian_fill"]["frames"].get<int64_t>()
+        << " training frames (incomplete ones included), " << h["gaussian_fill"]["iterations"].get<int>()
+        << " EM rounds\n";
+    }
     variance(json(), h["variance_explained"]);
   }
   for (const auto& f : s["figures"]) o << "  figure: " << f.get<std::string>() << "\n";
