@@ -1,0 +1,83 @@
+#include "core/file_util.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace csw {
+
+namespace fs = std::filesystem;
+
+std::string UtcNow() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string ReadTextFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
+  std::ostringstream s;
+  s << in.rdbuf();
+  if (in.bad()) throw IoError(path, "cannot read");
+  return s.str();
+}
+
+std::string HiddenSibling(const std::string& path, const std::string& suffix) {
+  const fs::path p(path);
+  return (p.parent_path() / ("." + p.filename().string() + suffix)).string();
+}
+
+void FsyncPath(const std::string& p, bool directory, const std::string& target) {
+  const int fd = ::open(p.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
+  if (fd < 0) throw IoError(target, "cannot open " + p + " to sync it: " + std::strerror(errno));
+  const int r = ::fsync(fd);
+  const int saved = errno;
+  ::close(fd);
+  if (r != 0 && !(directory && (saved == EINVAL || saved == EROFS))) {
+    throw IoError(target, "cannot sync " + p + ": " + std::strerror(saved));
+  }
+}
+
+void ReplaceFileDurably(const std::string& temp, const std::string& path) {
+  FsyncPath(temp, false, path);
+  if (::rename(temp.c_str(), path.c_str()) != 0) {
+    throw IoError(path, "cannot rename " + temp + " over it: " + std::strerror(errno));
+  }
+  const fs::path dir = fs::path(path).parent_path();
+  FsyncPath(dir.empty() ? std::string(".") : dir.string(), true, path);
+}
+
+WriterLock::WriterLock(const std::string& path, const std::string& what_is_locked)
+    : lock_path_(HiddenSibling(path, ".csw-lock")) {
+  fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw IoError(path, "cannot create the lock file " + lock_path_ + ": " + std::strerror(errno));
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int saved = errno;
+    ::close(fd_);
+    fd_ = -1;
+    if (saved == EWOULDBLOCK) {
+      throw IoError(path, "another csw command (in this or another process) is writing this " + what_is_locked +
+                              " (" + lock_path_ + " is locked); wait for it to finish");
+    }
+    throw IoError(path, "cannot lock " + lock_path_ + ": " + std::strerror(saved));
+  }
+}
+
+WriterLock::~WriterLock() {
+  if (fd_ >= 0) ::close(fd_);  // releases the flock
+}
+
+}  // namespace csw

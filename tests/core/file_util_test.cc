@@ -1,0 +1,78 @@
+#include "core/file_util.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+#include "core/error.h"
+
+namespace fs = std::filesystem;
+
+namespace csw {
+namespace {
+
+fs::path TempDir(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("csw_file_util_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+TEST(FileUtil, UtcNowIsIso8601Utc) {
+  const std::string s = UtcNow();
+  EXPECT_TRUE(std::regex_match(s, std::regex(R"(\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}Z)"))) << s;
+  EXPECT_GE(std::stoi(s.substr(0, 4)), 2024);
+}
+
+TEST(FileUtil, ReadTextFileReadsBytesAndNamesMissingFile) {
+  const fs::path d = TempDir("read");
+  const std::string bytes("a\0b\r\nc", 6);
+  std::ofstream(d / "x.bin", std::ios::binary) << bytes;
+  EXPECT_EQ(ReadTextFile((d / "x.bin").string()), bytes);
+  try {
+    ReadTextFile((d / "missing.json").string());
+    FAIL() << "no error";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.json"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FileUtil, HiddenSiblingIsInTheSameFolder) {
+  EXPECT_EQ(HiddenSibling("/a/b/corpus.h5", ".csw-tmp"), "/a/b/.corpus.h5.csw-tmp");
+  EXPECT_EQ(HiddenSibling("m.h5", ".csw-lock"), ".m.h5.csw-lock");
+}
+
+TEST(FileUtil, ReplaceFileDurablyReplacesContent) {
+  const fs::path d = TempDir("replace");
+  std::ofstream(d / "f.txt") << "old";
+  std::ofstream(d / ".f.txt.tmp") << "new";
+  ReplaceFileDurably((d / ".f.txt.tmp").string(), (d / "f.txt").string());
+  EXPECT_EQ(ReadTextFile((d / "f.txt").string()), "new");
+  EXPECT_FALSE(fs::exists(d / ".f.txt.tmp"));
+  EXPECT_THROW(ReplaceFileDurably((d / "absent").string(), (d / "f.txt").string()), IoError);
+  EXPECT_EQ(ReadTextFile((d / "f.txt").string()), "new");
+}
+
+TEST(FileUtil, WriterLockIsExclusiveAndReleased) {
+  const fs::path d = TempDir("lock");
+  const std::string path = (d / "models.h5").string();
+  {
+    WriterLock first(path, "model file");
+    EXPECT_EQ(first.lock_path(), (d / ".models.h5.csw-lock").string());
+    try {
+      WriterLock second(path, "model file");
+      FAIL() << "second lock taken";
+    } catch (const IoError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("models.h5"), std::string::npos) << m;
+      EXPECT_NE(m.find("model file"), std::string::npos) << m;
+    }
+  }
+  EXPECT_NO_THROW(WriterLock again(path, "model file"));
+}
+
+}  // namespace
+}  // namespace csw
