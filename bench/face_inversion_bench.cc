@@ -110,7 +110,8 @@ void BM_InvertFace(benchmark::State& state) {
     }
   }
   state.counters["frames_per_second"] = benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
-  state.counters["converged_fraction"] = static_cast<double>(converged) / static_cast<double>(std::max<int64_t>(1, solved));
+  state.counters["converged_fraction"] =
+      static_cast<double>(converged) / static_cast<double>(std::max<int64_t>(1, solved));
   state.counters["mean_error_mm"] = error_sum / static_cast<double>(std::max<int64_t>(1, error_count));
 }
 BENCHMARK(BM_InvertFace)->Arg(1)->Arg(0)->ArgName("warm")->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -4,13 +4,13 @@
 // 15 phalanges of 2, 2 and 3 markers), 48 joint angles (10 constant twists),
 // 12 PCA parameters and a random [1, cos, sin] map; takes of 1,200 frames
 // (10 s at 120 Hz) with 0.2 mm noise and 5% of the samples missing.
+#include <benchmark/benchmark.h>
+
+#include <Eigen/QR>
 #include <atomic>
 #include <cmath>
 #include <random>
 #include <thread>
-
-#include <Eigen/QR>
-#include <benchmark/benchmark.h>
 
 #include "models/hand_model.h"
 
@@ -33,13 +33,14 @@ HandModel BenchModel() {
   l.segments.push_back(palm);
   for (int f = 0; f < 5; ++f) {
     for (int p = 0; p < 3; ++p) {
-      HandSegmentDef seg{"f" + std::to_string(f) + std::to_string(p), p == 0 ? 0 : static_cast<int>(l.segments.size()) - 1, {}};
+      HandSegmentDef seg{
+          "f" + std::to_string(f) + std::to_string(p), p == 0 ? 0 : static_cast<int>(l.segments.size()) - 1, {}};
       const int k = p == 2 ? 3 : 2;
       for (int j = 0; j < k; ++j) seg.markers.push_back(add(seg.name + "m" + std::to_string(j)));
       l.segments.push_back(seg);
     }
   }
-  const int nh = l.num_shape_markers();  // 43
+  const int nh = l.num_shape_markers();                   // 43
   const int n = 3 * static_cast<int>(l.segments.size());  // 48
   const int p = 12;
   m.forearm.name = "forearm";

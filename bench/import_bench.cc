@@ -85,7 +85,13 @@ void BM_CswImportPeakRss(benchmark::State& state) {
   state.counters["file_MB"] = static_cast<double>(fs::file_size(c3d)) / 1e6;
   fs::remove(corpus);
 }
-BENCHMARK(BM_CswImportPeakRss)->Arg(6000)->Arg(60000)->Arg(240000)->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CswImportPeakRss)
+    ->Arg(6000)
+    ->Arg(60000)
+    ->Arg(240000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

@@ -54,8 +54,8 @@ class Cancelled : public Error {
 };
 
 // Throws ParseError if cond is true.
-#define CSW_PARSE_CHECK(cond, location, message)      \
-  do {                                                \
+#define CSW_PARSE_CHECK(cond, location, message)                 \
+  do {                                                           \
     if (!(cond)) throw ::csw::ParseError((location), (message)); \
   } while (0)
 

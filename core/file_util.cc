@@ -69,8 +69,8 @@ WriterLock::WriterLock(const std::string& path, const std::string& what_is_locke
     ::close(fd_);
     fd_ = -1;
     if (saved == EWOULDBLOCK) {
-      throw IoError(path, "another csw command (in this or another process) is writing this " + what_is_locked +
-                              " (" + lock_path_ + " is locked); wait for it to finish");
+      throw IoError(path, "another csw command (in this or another process) is writing this " + what_is_locked + " (" +
+                              lock_path_ + " is locked); wait for it to finish");
     }
     throw IoError(path, "cannot lock " + lock_path_ + ": " + std::strerror(saved));
   }

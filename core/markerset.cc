@@ -34,7 +34,8 @@ std::string Normalise(const std::string& label) {
   if (colon != std::string::npos) s = s.substr(colon + 1);
   std::string out;
   for (char c : s) {
-    if (!std::isspace(static_cast<unsigned char>(c))) out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (!std::isspace(static_cast<unsigned char>(c)))
+      out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   }
   return out;
 }
@@ -76,7 +77,8 @@ void Validate(const MarkerSet& set, const std::string& file) {
   for (const auto& [canon, alts] : set.aliases) {
     for (const auto& a : alts) {
       auto [it, ok] = alias_owner.emplace(a, canon);
-      if (!ok && it->second != canon) fail("alias \"" + a + "\" is given to both \"" + it->second + "\" and \"" + canon + "\"");
+      if (!ok && it->second != canon)
+        fail("alias \"" + a + "\" is given to both \"" + it->second + "\" and \"" + canon + "\"");
     }
   }
 }
@@ -108,9 +110,9 @@ MarkerSet ParseMarkerSet(const std::string& json_text, const std::string& file) 
   json j = ParseJsonText(json_text, file);
   const std::string where = file.empty() ? std::string("<marker set>") : file;
   if (!j.is_object()) throw InvalidInput(where + ": marker set must be a JSON object");
-  static const std::set<std::string> kKeys = {"name", "description", "format", "version", "aliases",
-                                              "head_cluster", "forearm_cluster", "face", "throat",
-                                              "hand_segments", "fingertips", "palm", "sticks"};
+  static const std::set<std::string> kKeys = {
+      "name", "description", "format",        "version",    "aliases", "head_cluster", "forearm_cluster",
+      "face", "throat",      "hand_segments", "fingertips", "palm",    "sticks"};
   for (auto it = j.begin(); it != j.end(); ++it) {
     if (!kKeys.count(it.key())) throw InvalidInput(where + ": marker set: unknown key \"" + it.key() + "\"");
   }
@@ -230,14 +232,23 @@ MarkerBinding BindMarkerSet(const MarkerSet& set, const std::vector<std::string>
     if (a != set.aliases.end()) candidates.insert(candidates.end(), a->second.begin(), a->second.end());
     int found = -1;
     for (const auto& c : candidates) {
-      if (auto it = exact.find(c); it != exact.end()) { found = it->second; break; }
+      if (auto it = exact.find(c); it != exact.end()) {
+        found = it->second;
+        break;
+      }
     }
     if (found < 0) {
       for (const auto& c : candidates) {
-        if (auto it = loose.find(Normalise(c)); it != loose.end()) { found = it->second; break; }
+        if (auto it = loose.find(Normalise(c)); it != loose.end()) {
+          found = it->second;
+          break;
+        }
       }
     }
-    if (found >= 0) b.index[canon] = found; else b.missing.push_back(canon);
+    if (found >= 0)
+      b.index[canon] = found;
+    else
+      b.missing.push_back(canon);
   }
   if (require_all && !b.missing.empty()) {
     std::string list;

@@ -46,8 +46,8 @@ std::string MarkerSetToJson(const MarkerSet& set);
 
 // The marker set applied to one take's labels: canonical name -> column index.
 struct MarkerBinding {
-  std::map<std::string, int> index;        // canonical name -> take column
-  std::vector<std::string> missing;        // canonical names with no column
+  std::map<std::string, int> index;  // canonical name -> take column
+  std::vector<std::string> missing;  // canonical names with no column
   // Column of a canonical name; throws InvalidInput when unbound.
   int At(const std::string& canonical) const;
   std::vector<int> Columns(const std::vector<std::string>& canonical) const;
@@ -55,7 +55,7 @@ struct MarkerBinding {
 
 // Matches labels (exact, then aliases, then case-insensitive with any "Subject:" prefix
 // removed). When require_all, throws InvalidInput listing every unbound marker.
-MarkerBinding BindMarkerSet(const MarkerSet& set, const std::vector<std::string>& labels,
-                            bool require_all, const std::string& take_name = "");
+MarkerBinding BindMarkerSet(const MarkerSet& set, const std::vector<std::string>& labels, bool require_all,
+                            const std::string& take_name = "");
 
 }  // namespace csw

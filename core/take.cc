@@ -30,7 +30,8 @@ int64_t CountGaps(const MarkerArray& markers, int64_t marker) {
 double MillimetresPerUnit(const std::string& units) {
   std::string u;
   for (char c : units) {
-    if (!std::isspace(static_cast<unsigned char>(c))) u += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (!std::isspace(static_cast<unsigned char>(c)))
+      u += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   }
   if (u == "mm" || u.empty()) return 1.0;
   if (u == "m") return 1000.0;

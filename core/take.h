@@ -44,9 +44,7 @@ class MarkerArray {
   }
 
  private:
-  size_t Index(int64_t frame, int64_t marker) const {
-    return static_cast<size_t>((frame * markers_ + marker) * 3);
-  }
+  size_t Index(int64_t frame, int64_t marker) const { return static_cast<size_t>((frame * markers_ + marker) * 3); }
   int64_t frames_ = 0;
   int64_t markers_ = 0;
   std::vector<float> data_;
@@ -97,9 +95,9 @@ struct Audio {
 };
 
 struct SourceFile {
-  std::string path;     // as given at import
-  std::string sha256;   // hex of the file's bytes
-  std::string format;   // "c3d", "trc", "wav", "textgrid", "eaf"
+  std::string path;    // as given at import
+  std::string sha256;  // hex of the file's bytes
+  std::string format;  // "c3d", "trc", "wav", "textgrid", "eaf"
 };
 
 struct Provenance {
@@ -111,16 +109,16 @@ struct Provenance {
 
 struct Take {
   std::string name;
-  double rate_hz = 0.0;         // marker frame rate
-  int64_t first_frame = 1;      // 1-based number of the first frame in the source file
+  double rate_hz = 0.0;     // marker frame rate
+  int64_t first_frame = 1;  // 1-based number of the first frame in the source file
   std::vector<std::string> marker_names;
-  MarkerArray markers;          // in millimetres
+  MarkerArray markers;              // in millimetres
   std::string source_units = "mm";  // units as stored in the source, before conversion
   AnalogData analog;
   std::vector<Event> events;
   std::vector<LabelTier> tiers;
-  Audio audio;                  // empty when none
-  std::string audio_path;       // reference to the source WAV, when any
+  Audio audio;             // empty when none
+  std::string audio_path;  // reference to the source WAV, when any
   Provenance provenance;
 
   int64_t frames() const { return markers.frames(); }

@@ -217,8 +217,8 @@ void ApplyCaptureArtefacts(const VirtualCuer& cuer, const CaptureSetup& setup, s
     }
   // One temporary label swap between neighbouring hand markers.
   if (setup.label_swaps && hand && frames > 0) {
-    static const std::pair<const char*, const char*> kPairs[] = {
-        {"ITIP", "MTIP"}, {"MTIP", "RTIP"}, {"I3D", "M3D"}, {"M3D", "R3D"}, {"KNI", "KNM"}, {"FA2", "FA3"}};
+    static const std::pair<const char*, const char*> kPairs[] = {{"ITIP", "MTIP"}, {"MTIP", "RTIP"}, {"I3D", "M3D"},
+                                                                 {"M3D", "R3D"},   {"KNI", "KNM"},   {"FA2", "FA3"}};
     const auto& pr = kPairs[rng() % std::size(kPairs)];
     auto col = [&](const char* name) {
       auto it = std::find(r.take.marker_names.begin(), r.take.marker_names.end(), name);

@@ -99,8 +99,7 @@ std::vector<MarkerSpec> Specs() {
       double lat = c == 1 ? 1.0 : 0.5;
       char name[16];
       std::snprintf(name, sizeof name, "THR%02d", k + 1);
-      s.push_back({name, 't', x, y, z, jaw_row[r], 0, 0, 0, 0, 0,
-                   larynx_row[r] * lat, row_weight[r]});
+      s.push_back({name, 't', x, y, z, jaw_row[r], 0, 0, 0, 0, 0, larynx_row[r] * lat, row_weight[r]});
     }
   return s;
 }
@@ -147,12 +146,12 @@ VirtualFace::VirtualFace() {
     basis_[kLarynx].col(i) = Eigen::Vector3d(0.0, 0.15 * m.larynx_z, m.larynx_z);
   }
   const std::vector<std::pair<std::string, std::string>> sticks = {
-      {"FHL", "FHR"}, {"FHL", "TMPL"}, {"FHR", "TMPR"}, {"TMPL", "EARL"}, {"TMPR", "EARR"}, {"NAS", "NOST"},
-      {"NOSL", "NOST"}, {"NOSR", "NOST"}, {"EBLI", "EBLO"}, {"EBRI", "EBRO"},
-      {"LCR", "ULR"}, {"ULR", "ULM"}, {"ULM", "ULL"}, {"ULL", "LCL"}, {"LCR", "LLR"}, {"LLR", "LLM"},
-      {"LLM", "LLL"}, {"LLL", "LCL"}, {"PHL", "PHR"}, {"LCH", "CHIN"}, {"CHNR", "CHIN"}, {"CHIN", "CHNL"},
-      {"CHNL", "JWL2"}, {"JWL2", "JWL1"}, {"CHNR", "JWR2"}, {"JWR2", "JWR1"}, {"CHIN", "MNT"},
-      {"CHBL", "CKL1"}, {"CKL1", "CKL2"}, {"CKL2", "CKL3"}, {"CHBR", "CKR1"}, {"CKR1", "CKR2"}, {"CKR2", "CKR3"}};
+      {"FHL", "FHR"},   {"FHL", "TMPL"},  {"FHR", "TMPR"},  {"TMPL", "EARL"}, {"TMPR", "EARR"}, {"NAS", "NOST"},
+      {"NOSL", "NOST"}, {"NOSR", "NOST"}, {"EBLI", "EBLO"}, {"EBRI", "EBRO"}, {"LCR", "ULR"},   {"ULR", "ULM"},
+      {"ULM", "ULL"},   {"ULL", "LCL"},   {"LCR", "LLR"},   {"LLR", "LLM"},   {"LLM", "LLL"},   {"LLL", "LCL"},
+      {"PHL", "PHR"},   {"LCH", "CHIN"},  {"CHNR", "CHIN"}, {"CHIN", "CHNL"}, {"CHNL", "JWL2"}, {"JWL2", "JWL1"},
+      {"CHNR", "JWR2"}, {"JWR2", "JWR1"}, {"CHIN", "MNT"},  {"CHBL", "CKL1"}, {"CKL1", "CKL2"}, {"CKL2", "CKL3"},
+      {"CHBR", "CKR1"}, {"CKR1", "CKR2"}, {"CKR2", "CKR3"}};
   sticks_ = sticks;
   for (int r = 0; r < 6; ++r)
     for (int c = 0; c < 3; ++c) {

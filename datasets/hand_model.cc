@@ -73,7 +73,8 @@ const HandPosture& HandConfig::Posture(int shape) const {
 Eigen::VectorXd HandConfig::Clamp(const Eigen::VectorXd& angles) const {
   Eigen::VectorXd out = angles;
   for (size_t i = 0; i < joints.size(); ++i)
-    out[static_cast<Eigen::Index>(i)] = std::clamp(out[static_cast<Eigen::Index>(i)], joints[i].min_rad, joints[i].max_rad);
+    out[static_cast<Eigen::Index>(i)] =
+        std::clamp(out[static_cast<Eigen::Index>(i)], joints[i].min_rad, joints[i].max_rad);
   return out;
 }
 
@@ -94,11 +95,11 @@ HandConfig ParseHandConfig(const std::string& json_text, const std::string& file
   if (!j.contains("joints") || !j["joints"].is_array()) fail("needs a \"joints\" array");
   if (!j.contains("postures") || !j["postures"].is_array()) fail("needs a \"postures\" array");
   HandConfig config;
-  static const char* kRequired[] = {"wrist_flex", "wrist_dev", "thumb_cmc_flex", "thumb_cmc_abd", "thumb_mcp", "thumb_ip",
-                                    "index_mcp_flex", "index_mcp_abd", "index_pip", "index_dip",
-                                    "middle_mcp_flex", "middle_mcp_abd", "middle_pip", "middle_dip",
-                                    "ring_mcp_flex", "ring_mcp_abd", "ring_pip", "ring_dip",
-                                    "little_mcp_flex", "little_mcp_abd", "little_pip", "little_dip"};
+  static const char* kRequired[] = {
+      "wrist_flex",      "wrist_dev",      "thumb_cmc_flex", "thumb_cmc_abd", "thumb_mcp",       "thumb_ip",
+      "index_mcp_flex",  "index_mcp_abd",  "index_pip",      "index_dip",     "middle_mcp_flex", "middle_mcp_abd",
+      "middle_pip",      "middle_dip",     "ring_mcp_flex",  "ring_mcp_abd",  "ring_pip",        "ring_dip",
+      "little_mcp_flex", "little_mcp_abd", "little_pip",     "little_dip"};
   try {
     for (const json& jj : j["joints"]) {
       HandJoint joint;
@@ -137,7 +138,8 @@ HandConfig ParseHandConfig(const std::string& json_text, const std::string& file
         for (size_t i = 0; i < config.joints.size(); ++i) {
           double a = posture.angles[static_cast<Eigen::Index>(i)];
           if (a < config.joints[i].min_rad || a > config.joints[i].max_rad)
-            fail("posture " + std::to_string(shape) + ": joint \"" + config.joints[i].name + "\" is outside its limits");
+            fail("posture " + std::to_string(shape) + ": joint \"" + config.joints[i].name +
+                 "\" is outside its limits");
         }
       }
       config.postures[static_cast<size_t>(shape)] = posture;
@@ -207,8 +209,10 @@ VirtualHand::VirtualHand(HandConfig config) : config_(std::move(config)) {
     markers_[static_cast<size_t>(i)].slide_cos = Eigen::Vector3d(0.0, 0.0, -0.4);
     palm.markers.push_back(marker_names_.back());
   }
-  for (const auto& [name, p] : std::vector<std::pair<std::string, Eigen::Vector3d>>{
-           {"PD1", {-20.0, 45.0, 15.0}}, {"PD2", {0.0, 48.0, 16.0}}, {"PD3", {20.0, 42.0, 14.0}}, {"PTB", {-30.0, 18.0, 8.0}}}) {
+  for (const auto& [name, p] : std::vector<std::pair<std::string, Eigen::Vector3d>>{{"PD1", {-20.0, 45.0, 15.0}},
+                                                                                    {"PD2", {0.0, 48.0, 16.0}},
+                                                                                    {"PD3", {20.0, 42.0, 14.0}},
+                                                                                    {"PTB", {-30.0, 18.0, 8.0}}}) {
     add(name, 1, p);
     palm.markers.push_back(name);
   }
@@ -254,10 +258,24 @@ VirtualHand::VirtualHand(HandConfig config) : config_(std::move(config)) {
       if (p == 2) sticks_.emplace_back(stem + "D", std::string(g.letter) + "TIP");
     }
   }
-  for (const auto& [a, b] : std::vector<std::pair<std::string, std::string>>{
-           {"FA1", "FA2"}, {"FA1", "FA3"}, {"FA2", "FA4"}, {"FA3", "FA4"}, {"FA5", "FA2"}, {"WRR", "FA5"},
-           {"WRU", "FA1"}, {"WRR", "PTB"}, {"WRU", "PD3"}, {"PTB", "PD1"}, {"PD1", "PD2"}, {"PD2", "PD3"},
-           {"KNI", "KNM"}, {"KNM", "KNR"}, {"KNR", "KNL"}, {"PD1", "KNI"}, {"PD2", "KNM"}, {"PD3", "KNL"}})
+  for (const auto& [a, b] : std::vector<std::pair<std::string, std::string>>{{"FA1", "FA2"},
+                                                                             {"FA1", "FA3"},
+                                                                             {"FA2", "FA4"},
+                                                                             {"FA3", "FA4"},
+                                                                             {"FA5", "FA2"},
+                                                                             {"WRR", "FA5"},
+                                                                             {"WRU", "FA1"},
+                                                                             {"WRR", "PTB"},
+                                                                             {"WRU", "PD3"},
+                                                                             {"PTB", "PD1"},
+                                                                             {"PD1", "PD2"},
+                                                                             {"PD2", "PD3"},
+                                                                             {"KNI", "KNM"},
+                                                                             {"KNM", "KNR"},
+                                                                             {"KNR", "KNL"},
+                                                                             {"PD1", "KNI"},
+                                                                             {"PD2", "KNM"},
+                                                                             {"PD3", "KNL"}})
     sticks_.emplace_back(a, b);
 }
 

@@ -22,7 +22,7 @@ struct HandJoint {
 };
 
 struct HandPosture {
-  int shape = 0;                 // 0 = rest, 1-8 = LfPC hand shapes
+  int shape = 0;  // 0 = rest, 1-8 = LfPC hand shapes
   std::string name;
   std::string reference_finger;  // "index" or "middle": the finger brought to the placement
   Eigen::VectorXd angles;        // radians, one per joint

@@ -26,7 +26,9 @@ const PlacementDef& PlacementConfig::At(int placement) const {
 PlacementConfig ParsePlacementConfig(const std::string& json_text, const std::string& file, const VirtualFace* face) {
   const std::string where = file.empty() ? std::string("<placement config>") : file;
   json j = ParseJsonText(json_text, where);
-  auto fail = [&](const std::string& what) -> void { throw InvalidInput(where + ": placement configuration: " + what); };
+  auto fail = [&](const std::string& what) -> void {
+    throw InvalidInput(where + ": placement configuration: " + what);
+  };
   if (!j.is_object() || !j.contains("placements") || !j["placements"].is_array()) fail("needs a \"placements\" array");
   PlacementConfig config;
   config.placements.resize(kFreeSpacePlacement + 1);
@@ -37,7 +39,8 @@ PlacementConfig ParsePlacementConfig(const std::string& json_text, const std::st
       d.placement = jp.at("placement").get<int>();
       if (d.placement < 0 || d.placement > kFreeSpacePlacement)
         fail("placement " + std::to_string(d.placement) + " is not in 0-" + std::to_string(kFreeSpacePlacement));
-      if (seen[static_cast<size_t>(d.placement)]) fail("placement " + std::to_string(d.placement) + " is defined twice");
+      if (seen[static_cast<size_t>(d.placement)])
+        fail("placement " + std::to_string(d.placement) + " is defined twice");
       seen[static_cast<size_t>(d.placement)] = true;
       d.name = jp.value("name", "");
       d.anchor = jp.at("anchor").get<std::vector<std::string>>();
@@ -54,7 +57,8 @@ PlacementConfig ParsePlacementConfig(const std::string& json_text, const std::st
       d.pitch_rad = jp.value("pitch_deg", 0.0) * kDeg;
       d.twist_rad = jp.value("twist_deg", 0.0) * kDeg;
       d.contact = jp.value("contact", 0.0);
-      if (!(d.contact >= 0.0 && d.contact <= 1.0)) fail("placement " + std::to_string(d.placement) + ": contact must be in [0, 1]");
+      if (!(d.contact >= 0.0 && d.contact <= 1.0))
+        fail("placement " + std::to_string(d.placement) + ": contact must be in [0, 1]");
       config.placements[static_cast<size_t>(d.placement)] = d;
     }
   } catch (const json::exception& e) {

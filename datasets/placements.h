@@ -12,20 +12,20 @@ namespace csw {
 class VirtualFace;
 
 struct PlacementDef {
-  int placement = 0;                 // 0 rest, 1 side, 2 cheekbone, 3 mouth corner, 4 chin, 5 throat; 6 free space
+  int placement = 0;  // 0 rest, 1 side, 2 cheekbone, 3 mouth corner, 4 chin, 5 throat; 6 free space
   std::string name;
-  std::vector<std::string> anchor;   // face markers whose neutral mean is the landmark
+  std::vector<std::string> anchor;  // face markers whose neutral mean is the landmark
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   double frontal_rad = 0.0;
   double pitch_rad = 0.0;
   double twist_rad = 0.0;
-  double contact = 0.0;              // 0-1, scales the head's movement towards the hand
+  double contact = 0.0;  // 0-1, scales the head's movement towards the hand
 };
 
 inline constexpr int kFreeSpacePlacement = 6;
 
 struct PlacementConfig {
-  std::vector<PlacementDef> placements;  // indexed 0..6
+  std::vector<PlacementDef> placements;         // indexed 0..6
   const PlacementDef& At(int placement) const;  // throws InvalidInput when unknown
 };
 

@@ -38,7 +38,8 @@ void RenderFramePng(const std::string& path, const Eigen::Matrix3Xd& positions, 
                     const std::vector<std::string>& highlight) {
   cv::Mat img(options.height, options.width, CV_8UC3, kWhite);
   auto project = [&](const Eigen::Vector3d& p) {
-    double u = options.view == FrameRenderOptions::View::kFront ? p.x() - options.centre.x() : p.y() - options.centre.y();
+    double u =
+        options.view == FrameRenderOptions::View::kFront ? p.x() - options.centre.x() : p.y() - options.centre.y();
     double v = -(p.z() - options.centre.z());
     return cv::Point(static_cast<int>(std::lround(options.width / 2.0 + u / options.mm_per_pixel)),
                      static_cast<int>(std::lround(options.height / 2.0 + v / options.mm_per_pixel)));
@@ -73,12 +74,13 @@ void RenderFramePng(const std::string& path, const Eigen::Matrix3Xd& positions, 
   // Scale bar: 50 mm.
   int bar = static_cast<int>(std::lround(50.0 / options.mm_per_pixel));
   cv::line(img, cv::Point(10, options.height - 12), cv::Point(10 + bar, options.height - 12), kBlack, 2);
-  cv::putText(img, "50 mm", cv::Point(14 + bar, options.height - 8), cv::FONT_HERSHEY_SIMPLEX, 0.4, kBlack, 1, cv::LINE_AA);
+  cv::putText(img, "50 mm", cv::Point(14 + bar, options.height - 8), cv::FONT_HERSHEY_SIMPLEX, 0.4, kBlack, 1,
+              cv::LINE_AA);
   Write(path, img);
 }
 
-void RenderTrajectoryPlotPng(const std::string& path, const SimulationResult& r, const std::vector<std::string>& markers,
-                             int width, int height) {
+void RenderTrajectoryPlotPng(const std::string& path, const SimulationResult& r,
+                             const std::vector<std::string>& markers, int width, int height) {
   cv::Mat img(height, width, CV_8UC3, kWhite);
   const int left = 110, right = width - 20, top = 30;
   const int tier_h = 70;
@@ -99,8 +101,8 @@ void RenderTrajectoryPlotPng(const std::string& path, const SimulationResult& r,
       if (r.take.marker_names[i] == markers[static_cast<size_t>(p)]) col = static_cast<int>(i);
     const int y0 = top + p * panel_h, y1 = y0 + panel_h - 8;
     cv::rectangle(img, cv::Point(left, y0), cv::Point(right, y1), kGrey, 1);
-    cv::putText(img, markers[static_cast<size_t>(p)], cv::Point(8, (y0 + y1) / 2), cv::FONT_HERSHEY_SIMPLEX, 0.5, kBlack, 1,
-                cv::LINE_AA);
+    cv::putText(img, markers[static_cast<size_t>(p)], cv::Point(8, (y0 + y1) / 2), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+                kBlack, 1, cv::LINE_AA);
     if (col < 0) continue;
     double lo = 1e300, hi = -1e300;
     double mean[3] = {0, 0, 0};

@@ -1,9 +1,9 @@
 // Outputs of the virtual cuer: label tiers, ground truth, files per take, whole
 // corpora and the demo corpus.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -24,10 +24,14 @@ namespace {
 
 const char* KeyTypeName(KeyType t) {
   switch (t) {
-    case KeyType::kRest: return "rest";
-    case KeyType::kCV: return "cv";
-    case KeyType::kConsonantAlone: return "c";
-    case KeyType::kVowelAlone: return "v";
+    case KeyType::kRest:
+      return "rest";
+    case KeyType::kCV:
+      return "cv";
+    case KeyType::kConsonantAlone:
+      return "c";
+    case KeyType::kVowelAlone:
+      return "v";
   }
   return "";
 }
@@ -153,7 +157,8 @@ std::string TruthToJson(const SimulationResult& r) {
   }
   j["keys"] = keys;
   json phones = json::array();
-  for (const Phone& p : r.utterance.phones) phones.push_back({{"ipa", p.ipa}, {"start_s", p.start_s}, {"end_s", p.end_s}});
+  for (const Phone& p : r.utterance.phones)
+    phones.push_back({{"ipa", p.ipa}, {"start_s", p.start_s}, {"end_s", p.end_s}});
   j["phones"] = phones;
   j["joint_names"] = r.joint_angles.cols() > 0 ? r.joint_names : std::vector<std::string>{};
   j["joint_angles"] = Matrix(r.joint_angles, 1e-4);
@@ -253,9 +258,9 @@ std::vector<VisemeItem> VisemeItems() {
     const char* name;
     const char* v;
   };
-  const char* cons[][2] = {{"p", "p"}, {"b", "b"}, {"m", "m"}, {"f", "f"},  {"v", "v"},   {"t", "t"},
-                           {"d", "d"}, {"n", "n"}, {"s", "ss"}, {"z", "z"}, {"ʃ", "ch"}, {"ʒ", "j"},
-                           {"l", "l"}, {"ʁ", "r"}, {"k", "k"}, {"g", "gu"}, {"ɲ", "gn"}};
+  const char* cons[][2] = {{"p", "p"}, {"b", "b"}, {"m", "m"},  {"f", "f"},  {"v", "v"},  {"t", "t"},
+                           {"d", "d"}, {"n", "n"}, {"s", "ss"}, {"z", "z"},  {"ʃ", "ch"}, {"ʒ", "j"},
+                           {"l", "l"}, {"ʁ", "r"}, {"k", "k"},  {"g", "gu"}, {"ɲ", "gn"}};
   for (Context c : {Context{"a", "a"}, Context{"i", "i"}, Context{"u", "ou"}}) {
     std::string text;
     for (const auto& k : cons) {
@@ -269,7 +274,8 @@ std::vector<VisemeItem> VisemeItems() {
   return items;
 }
 
-std::vector<std::string> SimulateCorpus(const SimulateOptions& options, const std::string& out_dir, Progress& progress) {
+std::vector<std::string> SimulateCorpus(const SimulateOptions& options, const std::string& out_dir,
+                                        Progress& progress) {
   if (std::string why = options.Check(); !why.empty()) throw InvalidInput("simulate options: " + why);
   VirtualCuer cuer(options);
   std::error_code ec;

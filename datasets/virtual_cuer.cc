@@ -76,9 +76,12 @@ Eigen::VectorXd PlacementVector(const PlacementDef& d, const VirtualFace& face) 
 
 const char* CorpusKindName(CorpusKind kind) {
   switch (kind) {
-    case CorpusKind::kShapes: return "shapes";
-    case CorpusKind::kVisemes: return "visemes";
-    case CorpusKind::kSentences: return "sentences";
+    case CorpusKind::kShapes:
+      return "shapes";
+    case CorpusKind::kVisemes:
+      return "visemes";
+    case CorpusKind::kSentences:
+      return "sentences";
   }
   return "";
 }
@@ -152,13 +155,15 @@ MarkerSet VirtualCuer::MakeMarkerSet(CorpusKind kind) const {
   }
   const auto& rigid = face_.rigid_markers();
   for (const auto& [a, b] : face_.sticks()) {
-    bool rigid_pair = std::find(rigid.begin(), rigid.end(), a) != rigid.end() && std::find(rigid.begin(), rigid.end(), b) != rigid.end();
+    bool rigid_pair = std::find(rigid.begin(), rigid.end(), a) != rigid.end() &&
+                      std::find(rigid.begin(), rigid.end(), b) != rigid.end();
     if (face || rigid_pair) set.sticks.emplace_back(a, b);
   }
   return set;
 }
 
-Eigen::Matrix3Xd VirtualCuer::HandMarkersInLab(const Eigen::VectorXd& angles, const Eigen::Isometry3d& forearm_in_lab) const {
+Eigen::Matrix3Xd VirtualCuer::HandMarkersInLab(const Eigen::VectorXd& angles,
+                                               const Eigen::Isometry3d& forearm_in_lab) const {
   Eigen::Matrix3Xd m = hand_.MarkersInForearm(angles);
   for (Eigen::Index i = 0; i < m.cols(); ++i) m.col(i) = forearm_in_lab * Eigen::Vector3d(m.col(i));
   return m;
@@ -200,9 +205,9 @@ std::vector<KeyTiming> VirtualCuer::DrawTiming(const std::vector<Key>& keys, std
 // ---------------------------------------------------------------- scripts
 
 struct VirtualCuer::Script {
-  Utterance utterance;           // capture clock
-  bool hand = true;              // hand markers captured
-  std::vector<Key> keys;         // capture clock
+  Utterance utterance;    // capture clock
+  bool hand = true;       // hand markers captured
+  std::vector<Key> keys;  // capture clock
   std::vector<KeyTiming> timing;
   std::vector<int> pose_placement;  // placement definition used for each key's pose
   bool rigid_head_only = false;     // capture only the rigid head markers of the face
@@ -306,7 +311,8 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
   const int nh = script.hand ? hand_.num_markers() : 0;
   const int nj = hand_.num_joints();
   r.utterance = script.utterance;
-  for (size_t i = 0; i < script.keys.size(); ++i) r.keys.push_back({script.keys[i], script.timing[i], Eigen::VectorXd(), Eigen::Vector3d::Zero()});
+  for (size_t i = 0; i < script.keys.size(); ++i)
+    r.keys.push_back({script.keys[i], script.timing[i], Eigen::VectorXd(), Eigen::Vector3d::Zero()});
   for (const auto& j : hand_.config().joints) r.joint_names.push_back(j.name);
   r.joint_angles = Eigen::MatrixXd::Zero(frames, script.hand ? nj : 0);
   r.articulation = Eigen::MatrixXd::Zero(frames, kNumArticulatory);
@@ -322,7 +328,8 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
   take.rate_hz = rate;
   take.first_frame = 1;
   for (int i : face_idx) take.marker_names.push_back(face_.marker_names()[static_cast<size_t>(i)]);
-  if (script.hand) take.marker_names.insert(take.marker_names.end(), hand_.marker_names().begin(), hand_.marker_names().end());
+  if (script.hand)
+    take.marker_names.insert(take.marker_names.end(), hand_.marker_names().begin(), hand_.marker_names().end());
   take.audio = script.utterance.audio;
   take.provenance.csw_version = CSW_VERSION;
   r.clean = MarkerArray(frames, nf + nh);
@@ -346,9 +353,7 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
     // Each key's actual targets: the configured posture and placement with a
     // little per-key variability (a cuer never makes the same key twice).
     std::mt19937_64 var_rng = Stream(options_.seed, name, 4);
-    auto normal = [&](double sd) {
-      return sd * std::clamp(StandardNormal(var_rng), -2.5, 2.5);
-    };
+    auto normal = [&](double sd) { return sd * std::clamp(StandardNormal(var_rng), -2.5, 2.5); };
     std::vector<Eigen::VectorXd> shape_t(nk), place_t(nk);
     for (size_t i = 0; i < nk; ++i) {
       const HandPosture& p = hand_.config().Posture(script.keys[i].shape);
@@ -394,8 +399,10 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
     for (int d = 0; d < 6; ++d) {
       double v = 0.0;
       for (int k = 0; k < 2; ++k) v += amp[d][k] * std::sin(2.0 * M_PI * freq[d][k] * t + phase[d][k]);
-      if (d < 3) motion.rotation[d] = v;
-      else motion.translation[d - 3] = v;
+      if (d < 3)
+        motion.rotation[d] = v;
+      else
+        motion.translation[d - 3] = v;
     }
     Eigen::Isometry3d forearm_in_head = Eigen::Isometry3d::Identity();
     Eigen::VectorXd q;

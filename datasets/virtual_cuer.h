@@ -26,23 +26,23 @@
 namespace csw {
 
 enum class CorpusKind { kShapes, kVisemes, kSentences };
-const char* CorpusKindName(CorpusKind kind);             // "shapes", "visemes", "sentences"
+const char* CorpusKindName(CorpusKind kind);  // "shapes", "visemes", "sentences"
 bool ParseCorpusKind(const std::string& name, CorpusKind* kind);
 
 struct SimulateOptions {
   CorpusKind kind = CorpusKind::kSentences;
   // Sentences to cue (kSentences); empty = the shipped list (datasets/sentences_fr.txt).
   std::vector<std::string> sentences;
-  int count = 0;              // kSentences: first `count` sentences (0 = all)
+  int count = 0;  // kSentences: first `count` sentences (0 = all)
   uint64_t seed = 1;
-  double rate_hz = 120.0;     // capture frame rate
+  double rate_hz = 120.0;  // capture frame rate
   // Capture artefacts.
-  double noise_mm = 0.2;      // σ of the Gaussian marker noise per coordinate
-  bool occlusions = true;     // line of sight of the virtual cameras
+  double noise_mm = 0.2;   // σ of the Gaussian marker noise per coordinate
+  bool occlusions = true;  // line of sight of the virtual cameras
   int cameras = 8;
-  int min_cameras = 2;        // a marker is reconstructed when seen by this many cameras
+  int min_cameras = 2;           // a marker is reconstructed when seen by this many cameras
   double dropouts_per_s = 0.03;  // per marker: rate of short dropped-sample runs (1-6 frames)
-  bool label_swaps = false;   // one temporary swap of two neighbouring hand markers per take
+  bool label_swaps = false;      // one temporary swap of two neighbouring hand markers per take
   // Timing. overlap_gestures: movement times drawn independently from the
   // phasing model's laws and overlapping gestures blended (superposition), so
   // the drawn times have the model's means; false: synth SampleTiming (each
@@ -59,8 +59,8 @@ struct SimulateOptions {
   bool audio = true;          // synthesise audio (false: espeak-ng phone times only)
   double lead_in_s = 0.6;     // capture before the audio and after the last movement
   // Outputs of SimulateCorpus.
-  bool write_truth = true;    // <name>.truth.json
-  bool write_clean = false;   // <name>.clean.c3d (markers without artefacts)
+  bool write_truth = true;   // <name>.truth.json
+  bool write_clean = false;  // <name>.clean.c3d (markers without artefacts)
   // C3D storage: float (exact) or int16 at c3d_scale_mm steps (half the size; the
   // demo corpus uses it — quantisation σ = scale/√12, far below the marker noise).
   bool int16_c3d = false;
@@ -75,9 +75,9 @@ struct SimulateOptions {
 // How the take's time line is laid out: the capture starts at t = 0 (frame 0);
 // the audio (padded with lead_in_s of silence) and every time below share it.
 struct GestureTruth {
-  Key key;                 // times shifted to the capture clock
-  KeyTiming timing;        // movement start/target times on the capture clock
-  Eigen::VectorXd posture;                 // the key's actual joint-angle target (rad)
+  Key key;                                                    // times shifted to the capture clock
+  KeyTiming timing;                                           // movement start/target times on the capture clock
+  Eigen::VectorXd posture;                                    // the key's actual joint-angle target (rad)
   Eigen::Vector3d placement_point = Eigen::Vector3d::Zero();  // actual fingertip target, head frame
 };
 
@@ -90,16 +90,16 @@ struct LabelSwap {
 };
 
 struct SimulationResult {
-  Take take;                    // markers with artefacts, tiers, audio
-  MarkerArray clean;            // same layout, no artefacts
-  std::vector<uint8_t> state;   // frames × markers MarkerState
-  Utterance utterance;          // phones and words on the capture clock
+  Take take;                   // markers with artefacts, tiers, audio
+  MarkerArray clean;           // same layout, no artefacts
+  std::vector<uint8_t> state;  // frames × markers MarkerState
+  Utterance utterance;         // phones and words on the capture clock
   std::vector<GestureTruth> keys;
   std::vector<std::string> joint_names;
-  Eigen::MatrixXd joint_angles;   // frames × joints (radians)
-  Eigen::MatrixXd articulation;   // frames × 6 (ArticulatoryParameter order)
-  Eigen::MatrixXd head_motion;    // frames × 6: rotation vector (rad), translation (mm), about the reference head frame
-  Eigen::MatrixXd forearm_pose;   // frames × 6: rotation vector (rad), translation (mm) of the forearm frame in the lab
+  Eigen::MatrixXd joint_angles;  // frames × joints (radians)
+  Eigen::MatrixXd articulation;  // frames × 6 (ArticulatoryParameter order)
+  Eigen::MatrixXd head_motion;   // frames × 6: rotation vector (rad), translation (mm), about the reference head frame
+  Eigen::MatrixXd forearm_pose;  // frames × 6: rotation vector (rad), translation (mm) of the forearm frame in the lab
   Eigen::Isometry3d head_reference = Eigen::Isometry3d::Identity();  // reference head frame in the lab
   std::vector<int> hand_columns;  // take columns of the hand markers (empty when no hand)
   std::vector<int> face_columns;  // take columns of the face markers (first columns)
@@ -145,7 +145,8 @@ class VirtualCuer {
   // 0-6 (6 = free space), shape 0-8.
   Eigen::Isometry3d ForearmInHead(int placement, int shape) const;
   // All markers (face then hand) in the lab for a held key, no head motion.
-  Eigen::Matrix3Xd KeyFrame(int placement, int shape, const ArticulatoryVector& face = ArticulatoryVector::Zero()) const;
+  Eigen::Matrix3Xd KeyFrame(int placement, int shape,
+                            const ArticulatoryVector& face = ArticulatoryVector::Zero()) const;
   // The reference head frame in the lab (head centre 1.25 m above the lab origin).
   static Eigen::Isometry3d HeadReference();
 
@@ -195,6 +196,7 @@ std::vector<std::string> SimulateCorpus(const SimulateOptions& options, const st
 
 // The demo corpus: shapes, visemes and the first `sentences` shipped sentences,
 // in out_dir/{shapes,visemes,sentences}, without clean copies (small: ≤ 20 MB).
-void GenerateDemoCorpus(const std::string& out_dir, uint64_t seed, int sentences, Progress& progress);  // 7 sentences: 20.6 MB
+void GenerateDemoCorpus(const std::string& out_dir, uint64_t seed, int sentences,
+                        Progress& progress);  // 7 sentences: 20.6 MB
 
 }  // namespace csw

@@ -14,9 +14,7 @@
 
 namespace {
 
-std::string TempPath(const char* suffix) {
-  return "/tmp/csw_fuzz_textgrid_" + std::to_string(getpid()) + suffix;
-}
+std::string TempPath(const char* suffix) { return "/tmp/csw_fuzz_textgrid_" + std::to_string(getpid()) + suffix; }
 
 void WriteAll(const std::string& path, const uint8_t* data, size_t size) {
   FILE* f = std::fopen(path.c_str(), "wb");
@@ -28,8 +26,7 @@ void WriteAll(const std::string& path, const uint8_t* data, size_t size) {
 bool SameLabels(const std::vector<csw::LabelTier>& a, const std::vector<csw::LabelTier>& b) {
   if (a.size() != b.size()) return false;
   for (size_t t = 0; t < a.size(); ++t) {
-    if (a[t].name != b[t].name || a[t].kind != b[t].kind ||
-        a[t].labels.size() != b[t].labels.size()) {
+    if (a[t].name != b[t].name || a[t].kind != b[t].kind || a[t].labels.size() != b[t].labels.size()) {
       return false;
     }
     // A 0..0 domain holding labels is written with the grid's domain.

@@ -14,9 +14,7 @@
 
 namespace {
 
-std::string TempPath(const char* suffix) {
-  return "/tmp/csw_fuzz_trc_" + std::to_string(getpid()) + suffix;
-}
+std::string TempPath(const char* suffix) { return "/tmp/csw_fuzz_trc_" + std::to_string(getpid()) + suffix; }
 
 void WriteAll(const std::string& path, const uint8_t* data, size_t size) {
   FILE* f = std::fopen(path.c_str(), "wb");
@@ -40,8 +38,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   csw::WriteTrc(out, take);
   csw::Take back = csw::ReadTrc(out);
   if (back.rate_hz != take.rate_hz || back.first_frame != take.first_frame ||
-      back.markers.frames() != take.markers.frames() ||
-      back.markers.markers() != take.markers.markers()) {
+      back.markers.frames() != take.markers.frames() || back.markers.markers() != take.markers.markers()) {
     std::abort();
   }
   const auto& a = take.markers.data();

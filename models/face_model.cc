@@ -1,16 +1,16 @@
 #include "models/face_model.h"
 
+#include <ceres/ceres.h>
+#include <ceres/tiny_solver.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <string>
-
-#include <Eigen/Cholesky>
-#include <Eigen/Geometry>
-#include <Eigen/LU>
-#include <ceres/ceres.h>
-#include <ceres/tiny_solver.h>
 
 #include "core/error.h"
 #include "models/frame_selection.h"
@@ -170,8 +170,8 @@ Eigen::Matrix3Xd FaceModel::MarkersInLab(const RigidTransform& pose, const Eigen
   return out;
 }
 
-FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>& takes,
-                       const FaceModelOptions& options, Progress* progress) {
+FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>& takes, const FaceModelOptions& options,
+                       Progress* progress) {
   CheckLayout(layout, "face model");
   if (takes.empty()) throw InvalidInput("face model: no training take");
   const int nh = static_cast<int>(layout.head.size());
@@ -322,10 +322,10 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
       ceres::Problem problem;
       for (int64_t f = 0; f < n; ++f) {
         const float* o = lab.at(f, j);
-        problem.AddResidualBlock(new ThroatResidual(&poses[static_cast<size_t>(f)], &model.rest_pose,
-                                                    params_rows.col(f).data(), num_params,
-                                                    Eigen::Vector3d(o[0], o[1], o[2])),
-                                 nullptr, &w, m.data(), l.data());
+        problem.AddResidualBlock(
+            new ThroatResidual(&poses[static_cast<size_t>(f)], &model.rest_pose, params_rows.col(f).data(), num_params,
+                               Eigen::Vector3d(o[0], o[1], o[2])),
+            nullptr, &w, m.data(), l.data());
       }
       problem.SetParameterLowerBound(&w, 0, 0.0);
       problem.SetParameterUpperBound(&w, 0, 1.0);
@@ -363,7 +363,7 @@ struct Prepared {
   Eigen::VectorXd rest_mean;      // 3ns: (1 − w)(R̄ m_j + t̄)
   Eigen::MatrixXd rest_loadings;  // 3ns × np: (1 − w) R̄ L_j
   RigidTransform rest;
-  int num_rigid_shape = 0;        // leading shape markers with w = 1 (the face)
+  int num_rigid_shape = 0;  // leading shape markers with w = 1 (the face)
 };
 
 // Per-frame problem for ceres::TinySolver: x = (δ, τ, p), R = exp(δ) R0,
@@ -386,10 +386,10 @@ struct FrameProblem {
   double prior = 0;
   Eigen::Matrix3d r0 = Eigen::Matrix3d::Identity();
   Eigen::Vector3d t0 = Eigen::Vector3d::Zero();
-  Eigen::Matrix3Xd obs;             // 3 × (nh + ns), lab
-  std::vector<uint8_t> visible;     // nh + ns
-  mutable Eigen::VectorXd x_head;   // 3ns scratch
-  mutable Eigen::VectorXd x_rest;   // 3ns scratch
+  Eigen::Matrix3Xd obs;            // 3 × (nh + ns), lab
+  std::vector<uint8_t> visible;    // nh + ns
+  mutable Eigen::VectorXd x_head;  // 3ns scratch
+  mutable Eigen::VectorXd x_rest;  // 3ns scratch
 
   int NumResiduals() const { return 3 * (m->nh + m->ns) + m->np; }
   int NumParameters() const { return 6 + m->np; }
@@ -471,8 +471,8 @@ struct FrameProblem {
 // The per-frame loop; N is the solver's parameter count (6 + P) as a
 // compile-time size, or Eigen::Dynamic (what InvertFace uses).
 template <int N>
-void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray& take,
-                 const InversionOptions& options, Progress* progress, InversionResult& out) {
+void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray& take, const InversionOptions& options,
+                 Progress* progress, InversionResult& out) {
   const int nh = prep.nh, ns = prep.ns, np = prep.np;
   const int nm = nh + ns;
   const int64_t frames = take.frames();
@@ -497,7 +497,8 @@ void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray
   Eigen::Matrix3Xd head_obs(3, nh);
 
   for (int64_t f = 0; f < frames; ++f) {
-    if (progress && (f & 1023) == 0) progress->Update("invert face", static_cast<double>(f) / static_cast<double>(frames));
+    if (progress && (f & 1023) == 0)
+      progress->Update("invert face", static_cast<double>(f) / static_cast<double>(frames));
     int vis_head = 0, vis_shape = 0;
     for (int c = 0; c < nm; ++c) {
       const float* q = take.at(f, c);
@@ -595,8 +596,8 @@ InversionResult InvertFace(const FaceModel& model, const MarkerArray& take, cons
   const int nh = static_cast<int>(layout.head.size());
   const int ns = layout.num_shape_markers();
   const int np = model.num_parameters();
-  if (model.head.reference.cols() != nh || model.head_weights.size() != ns ||
-      model.shape.num_coordinates() != 3 * ns || model.shape.mean.size() != 3 * ns) {
+  if (model.head.reference.cols() != nh || model.head_weights.size() != ns || model.shape.num_coordinates() != 3 * ns ||
+      model.shape.mean.size() != 3 * ns) {
     throw InvalidInput("face inversion: the model is inconsistent with its layout " + LayoutSummary(layout));
   }
   if (take.markers() != layout.num_markers()) {

@@ -19,10 +19,9 @@
 // for face markers). For small head motions this equals applying the fraction
 // w of the motion. The weights not fixed by the marker set are fitted jointly
 // with the shape directions (Ceres; FitFaceModel).
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/progress.h"
 #include "core/take.h"
@@ -48,18 +47,18 @@ struct FaceModelOptions {
   // throat). Empty: one step over all shape markers with default_components.
   std::vector<GuidedPcaStep> steps;
   int default_components = 6;
-  double min_distance_mm = 2.0;      // training-frame selection (frame_selection.h)
-  RigidModelOptions head;            // head cluster fit and motion PCA
-  int throat_weight_rounds = 4;      // alternations PCA ↔ weight fit (0: weights stay at their start)
+  double min_distance_mm = 2.0;        // training-frame selection (frame_selection.h)
+  RigidModelOptions head;              // head cluster fit and motion PCA
+  int throat_weight_rounds = 4;        // alternations PCA ↔ weight fit (0: weights stay at their start)
   double initial_throat_weight = 0.5;  // start for fitted weights
 };
 
 struct FaceModel {
   FaceLayout layout;
-  RigidModel head;                  // cluster reference and motion PCA (nmF)
-  Eigen::VectorXd head_weights;     // one per shape marker: 1 for face, w for throat (fixed or fitted)
-  RigidTransform rest_pose;         // (R̄, t̄) above
-  GuidedPcaModel shape;             // over the shape markers, head frame
+  RigidModel head;               // cluster reference and motion PCA (nmF)
+  Eigen::VectorXd head_weights;  // one per shape marker: 1 for face, w for throat (fixed or fitted)
+  RigidTransform rest_pose;      // (R̄, t̄) above
+  GuidedPcaModel shape;          // over the shape markers, head frame
   ModelInfo info;
 
   int num_parameters() const { return shape.num_parameters(); }
@@ -80,7 +79,7 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
 
 // Per-frame inversion of a model-ordered take (see inversion.h). pose is the
 // head cluster pose; params the shape parameters.
-InversionResult InvertFace(const FaceModel& model, const MarkerArray& take,
-                           const InversionOptions& options = {}, Progress* progress = nullptr);
+InversionResult InvertFace(const FaceModel& model, const MarkerArray& take, const InversionOptions& options = {},
+                           Progress* progress = nullptr);
 
 }  // namespace csw

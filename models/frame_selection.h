@@ -18,9 +18,9 @@
 namespace csw {
 
 struct FrameSelection {
-  std::vector<int64_t> frames;       // kept frames, increasing
-  int64_t complete_frames = 0;       // frames with all chosen markers visible
-  int64_t incomplete_frames = 0;     // frames excluded for a missing marker
+  std::vector<int64_t> frames;    // kept frames, increasing
+  int64_t complete_frames = 0;    // frames with all chosen markers visible
+  int64_t incomplete_frames = 0;  // frames excluded for a missing marker
 };
 
 // Throws InvalidInput if columns is empty or out of range, or min_distance_mm <= 0.

@@ -1,11 +1,10 @@
 #include "models/gaussian_fill.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <string>
-
-#include <Eigen/Cholesky>
 
 #include "core/error.h"
 

@@ -12,10 +12,9 @@
 // shrunk by the imputation). Occlusions hide markers precisely in some
 // postures (a folded finger behind the palm); training on complete frames
 // only would hardly ever see those postures.
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/progress.h"
 
@@ -57,10 +56,10 @@ class GaussianFiller {
 
  private:
   const GaussianFill& fill_;
-  Eigen::MatrixXd precision_;  // (Σ + ρI)⁻¹
-  std::vector<uint8_t> pattern_;  // seen markers of the cached gain
+  Eigen::MatrixXd precision_;        // (Σ + ρI)⁻¹
+  std::vector<uint8_t> pattern_;     // seen markers of the cached gain
   std::vector<int> seen_, missing_;  // coordinate indices
-  Eigen::MatrixXd gain_;  // |missing| × |seen|
+  Eigen::MatrixXd gain_;             // |missing| × |seen|
 };
 
 }  // namespace csw

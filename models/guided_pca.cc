@@ -1,12 +1,11 @@
 #include "models/guided_pca.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <set>
 #include <string>
-
-#include <Eigen/Cholesky>
-#include <Eigen/SVD>
 
 #include "core/error.h"
 
@@ -26,12 +25,11 @@ std::vector<int> StepColumns(size_t index, const GuidedPcaStep& step, int num_ma
   std::set<int> seen;
   for (int m : step.markers) {
     if (m < 0 || m >= num_markers) {
-      throw InvalidInput(StepLabel(index, step) + ": marker index " + std::to_string(m) +
-                         " is outside 0.." + std::to_string(num_markers - 1));
+      throw InvalidInput(StepLabel(index, step) + ": marker index " + std::to_string(m) + " is outside 0.." +
+                         std::to_string(num_markers - 1));
     }
     if (!seen.insert(m).second) {
-      throw InvalidInput(StepLabel(index, step) + ": marker index " + std::to_string(m) +
-                         " is listed twice");
+      throw InvalidInput(StepLabel(index, step) + ": marker index " + std::to_string(m) + " is listed twice");
     }
     for (int k = 0; k < 3; ++k) cols.push_back(3 * m + k);
   }
@@ -45,8 +43,7 @@ GuidedPcaModel FitGuidedPca(const Eigen::MatrixXd& data, const std::vector<Guide
   const Eigen::Index d = data.cols();
   if (n < 2) throw InvalidInput("guided PCA needs at least 2 frames, got " + std::to_string(n));
   if (d <= 0 || d % 3 != 0) {
-    throw InvalidInput("guided PCA needs 3 coordinates per marker, got " + std::to_string(d) +
-                       " columns");
+    throw InvalidInput("guided PCA needs 3 coordinates per marker, got " + std::to_string(d) + " columns");
   }
   if (!data.allFinite()) throw InvalidInput("guided PCA data holds a non-finite value");
   if (steps.empty()) throw InvalidInput("guided PCA needs at least one step");
@@ -90,8 +87,7 @@ GuidedPcaModel FitGuidedPca(const Eigen::MatrixXd& data, const std::vector<Guide
       const Eigen::VectorXd t = sqrt_dof * svd.matrixU().col(k);
       const Eigen::VectorXd loading = residual.transpose() * svd.matrixU().col(k) / sqrt_dof;
       model.loadings.col(p) = loading;
-      model.parameter_names.push_back(step.components == 1 ? step.name
-                                                           : step.name + std::to_string(k + 1));
+      model.parameter_names.push_back(step.components == 1 ? step.name : step.name + std::to_string(k + 1));
       const double explained = t.squaredNorm() * loading.squaredNorm();
       model.variance_explained.push_back(explained / total);
       ++p;
@@ -106,26 +102,24 @@ GuidedPcaModel FitGuidedPca(const Eigen::MatrixXd& data, const std::vector<Guide
 
 Eigen::VectorXd GuidedPcaModel::Predict(const Eigen::VectorXd& params) const {
   if (params.size() != loadings.cols()) {
-    throw InvalidInput("guided PCA model has " + std::to_string(loadings.cols()) +
-                       " parameters, got " + std::to_string(params.size()));
+    throw InvalidInput("guided PCA model has " + std::to_string(loadings.cols()) + " parameters, got " +
+                       std::to_string(params.size()));
   }
   return mean + loadings * params;
 }
 
-Eigen::VectorXd GuidedPcaModel::Estimate(const Eigen::VectorXd& coordinates,
-                                         const std::vector<bool>& visible) const {
+Eigen::VectorXd GuidedPcaModel::Estimate(const Eigen::VectorXd& coordinates, const std::vector<bool>& visible) const {
   const Eigen::Index d = loadings.rows();
   if (coordinates.size() != d || static_cast<Eigen::Index>(visible.size()) != d) {
     throw InvalidInput("guided PCA model has " + std::to_string(d) + " coordinates, got " +
-                       std::to_string(coordinates.size()) + " values and " +
-                       std::to_string(visible.size()) + " visibility flags");
+                       std::to_string(coordinates.size()) + " values and " + std::to_string(visible.size()) +
+                       " visibility flags");
   }
   std::vector<Eigen::Index> rows;
   for (Eigen::Index i = 0; i < d; ++i) {
     if (!visible[static_cast<size_t>(i)]) continue;
     if (!std::isfinite(coordinates(i))) {
-      throw InvalidInput("guided PCA estimate: visible coordinate " + std::to_string(i) +
-                         " is not finite");
+      throw InvalidInput("guided PCA estimate: visible coordinate " + std::to_string(i) + " is not finite");
     }
     rows.push_back(i);
   }
@@ -157,8 +151,8 @@ std::vector<bool> CoordinateMaskFromMarkers(const std::vector<bool>& marker_visi
 
 namespace {
 
-void AddStep(std::vector<GuidedPcaStep>& steps, const std::string& name,
-             const std::vector<int>& markers, int components) {
+void AddStep(std::vector<GuidedPcaStep>& steps, const std::string& name, const std::vector<int>& markers,
+             int components) {
   if (markers.empty()) return;
   steps.push_back({name, markers, components});
 }

@@ -18,10 +18,9 @@
 //
 // MOTHER's "second jaw component" (jaw advance) is read as the first component
 // of a second PCA of the jaw subset taken after the lip steps.
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace csw {
 
@@ -32,12 +31,12 @@ struct GuidedPcaStep {
 };
 
 struct GuidedPcaModel {
-  Eigen::VectorXd mean;                     // 3M
+  Eigen::VectorXd mean;  // 3M
   std::vector<GuidedPcaStep> steps;
-  Eigen::MatrixXd loadings;                 // 3M × P: coordinates = mean + loadings · params
-  std::vector<std::string> parameter_names; // P
-  std::vector<double> variance_explained;   // P: fraction of the total variance about the mean
-  double residual_variance = 0;             // fraction left unexplained after all steps
+  Eigen::MatrixXd loadings;                  // 3M × P: coordinates = mean + loadings · params
+  std::vector<std::string> parameter_names;  // P
+  std::vector<double> variance_explained;    // P: fraction of the total variance about the mean
+  double residual_variance = 0;              // fraction left unexplained after all steps
   // Relative ridge of Estimate: λ = kEstimateRidge · trace(AᵀA) / P.
   static constexpr double kEstimateRidge = 1e-12;
 
@@ -53,8 +52,7 @@ struct GuidedPcaModel {
   // `visible` has one flag per coordinate (size 3M); hidden coordinates may
   // hold anything (NaN included). Throws InvalidInput on a size mismatch, a
   // non-finite visible coordinate, or no visible coordinate.
-  Eigen::VectorXd Estimate(const Eigen::VectorXd& coordinates,
-                           const std::vector<bool>& visible) const;
+  Eigen::VectorXd Estimate(const Eigen::VectorXd& coordinates, const std::vector<bool>& visible) const;
   // Same with every coordinate visible.
   Eigen::VectorXd Estimate(const Eigen::VectorXd& coordinates) const;
 };

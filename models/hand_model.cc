@@ -1,18 +1,18 @@
 #include "models/hand_model.h"
 
+#include <ceres/tiny_solver.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/QR>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
 #include <set>
 #include <string>
-
-#include <Eigen/Cholesky>
-#include <Eigen/SVD>
-#include <Eigen/Eigenvalues>
-#include <Eigen/Geometry>
-#include <Eigen/QR>
-#include <ceres/tiny_solver.h>
 
 #include "core/error.h"
 #include "models/frame_selection.h"
@@ -110,8 +110,8 @@ JointAngles DirectionAngles(const Eigen::Vector3d& u) {
 }
 
 // Angles and frame of a segment from its observation, its parent's frame and its rest.
-void ApplyRest(const SegmentObservation& o, const Eigen::Matrix3d& parent, const Eigen::Matrix3d& rest,
-               JointAngles* ja, Eigen::Matrix3d* rot) {
+void ApplyRest(const SegmentObservation& o, const Eigen::Matrix3d& parent, const Eigen::Matrix3d& rest, JointAngles* ja,
+               Eigen::Matrix3d* rot) {
   if (o.direction) {
     *ja = DirectionAngles(rest.transpose() * o.u);
     *rot = parent * rest * RotationFromJointAngles(*ja);
@@ -261,11 +261,11 @@ Eigen::Matrix3d LeftJacobianSo3(const Eigen::Vector3d& w) {
 // The model's pieces in the form the solver uses (built once per InvertHand).
 struct Kernel {
   int nf = 0, nh = 0, p = 0, na = 0;  // forearm markers, hand markers, parameters, active angles
-  Eigen::Matrix3Xd reference;          // forearm cluster
-  Eigen::VectorXd intercept;           // 3·nh
-  Eigen::MatrixXd xcos_t, xsin_t;      // 3·nh × na
-  Eigen::VectorXd mean;                // na
-  Eigen::MatrixXd cs;                  // na × p: components · diag(scale)
+  Eigen::Matrix3Xd reference;         // forearm cluster
+  Eigen::VectorXd intercept;          // 3·nh
+  Eigen::MatrixXd xcos_t, xsin_t;     // 3·nh × na
+  Eigen::VectorXd mean;               // na
+  Eigen::MatrixXd cs;                 // na × p: components · diag(scale)
   double prior = 0;
   double forearm_weight = 1;  // on the forearm cluster residuals (see the header)
 
@@ -289,7 +289,8 @@ struct Kernel {
         active.push_back(i);
       } else if (used) {
         // Constant angle: fold its features into the intercept.
-        intercept += std::cos(pca.mean(i)) * x.row(1 + i).transpose() + std::sin(pca.mean(i)) * x.row(1 + n + i).transpose();
+        intercept +=
+            std::cos(pca.mean(i)) * x.row(1 + i).transpose() + std::sin(pca.mean(i)) * x.row(1 + n + i).transpose();
       }
     }
     na = static_cast<int>(active.size());
@@ -312,8 +313,8 @@ struct Kernel {
 
 // Per-solve state and scratch space (one per InvertHand call: not shared).
 struct Workspace {
-  Eigen::Matrix3Xd obs;            // 3 × (nf + nh), lab
-  std::vector<uint8_t> visible;    // nf + nh
+  Eigen::Matrix3Xd obs;          // 3 × (nf + nh), lab
+  std::vector<uint8_t> visible;  // nf + nh
   Eigen::Matrix3d r0 = Eigen::Matrix3d::Identity();
   Eigen::Vector3d t0 = Eigen::Vector3d::Zero();
   Eigen::VectorXd a, c, s, local;  // na, na, na, 3·nh
@@ -537,8 +538,8 @@ Eigen::Matrix3Xd HandModel::ShapeMarkersInLab(const RigidTransform& pose, const 
   const Eigen::VectorXd local = shape.Predict(params);
   const Eigen::Index nh = layout.num_shape_markers();
   if (local.size() != 3 * nh) {
-    throw InvalidInput("hand model: the shape model predicts " + std::to_string(local.size()) +
-                       " coordinates for " + std::to_string(nh) + " hand markers");
+    throw InvalidInput("hand model: the shape model predicts " + std::to_string(local.size()) + " coordinates for " +
+                       std::to_string(nh) + " hand markers");
   }
   Eigen::Matrix3Xd out(3, nh);
   for (Eigen::Index m = 0; m < nh; ++m) out.col(m) = pose.Apply(local.segment<3>(3 * m));
@@ -554,14 +555,14 @@ Eigen::Matrix3Xd HandModel::MarkersInLab(const RigidTransform& pose, const Eigen
   return out;
 }
 
-HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>& takes,
-                       const HandModelOptions& options, Progress* progress) {
+HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>& takes, const HandModelOptions& options,
+                       Progress* progress) {
   const std::string bad = CheckHandLayout(layout);
   if (!bad.empty()) throw InvalidInput("hand model layout: " + bad);
   const int n_angles = 3 * static_cast<int>(layout.segments.size());
   if (options.angle_components < 1 || options.angle_components > n_angles) {
-    throw InvalidInput("hand model: angle_components " + std::to_string(options.angle_components) +
-                       " outside 1.." + std::to_string(n_angles) + " (3 angles per segment)");
+    throw InvalidInput("hand model: angle_components " + std::to_string(options.angle_components) + " outside 1.." +
+                       std::to_string(n_angles) + " (3 angles per segment)");
   }
   if (!(options.min_distance_mm > 0)) throw InvalidInput("hand model: min_distance_mm must be > 0");
   if (takes.empty()) throw InvalidInput("hand model: no training take");
@@ -593,7 +594,8 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
   int64_t complete = 0;
   std::vector<Eigen::VectorXd> fill_rows;  // training frames of the Gaussian gap filler
   for (size_t i = 0; i < takes.size(); ++i) {
-    if (progress) progress->Update("hand model: forearm frames", static_cast<double>(i) / static_cast<double>(takes.size()));
+    if (progress)
+      progress->Update("hand model: forearm frames", static_cast<double>(i) / static_cast<double>(takes.size()));
     const RigidSeries series =
         EstimateRigidSeries(takes[i], forearm_columns, model.forearm.reference, options.forearm.rigid, progress);
     const MarkerArray local = ToLocalFrame(Columns(takes[i], nf, nh), series);
@@ -630,7 +632,8 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
     count = static_cast<int64_t>(keep.size());
     MarkerArray kept(count, nh);
     for (int64_t r = 0; r < count; ++r) {
-      std::copy(local.at(keep[static_cast<size_t>(r)], 0), local.at(keep[static_cast<size_t>(r)], 0) + 3 * nh, kept.at(r, 0));
+      std::copy(local.at(keep[static_cast<size_t>(r)], 0), local.at(keep[static_cast<size_t>(r)], 0) + 3 * nh,
+                kept.at(r, 0));
     }
     complete += count;
     local_takes.push_back(std::move(kept));
@@ -682,9 +685,8 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
   }
   if (rows < options.angle_components + 1) {
     throw InvalidInput("hand model: " + std::to_string(rows) + " usable training frames (of " +
-                       std::to_string(selected) + " selected, " + std::to_string(complete) +
-                       " complete) for " + std::to_string(options.angle_components) +
-                       " angle components: need at least components + 1");
+                       std::to_string(selected) + " selected, " + std::to_string(complete) + " complete) for " +
+                       std::to_string(options.angle_components) + " angle components: need at least components + 1");
   }
   angles.conservativeResize(rows, Eigen::NoChange);
   coords.conservativeResize(rows, Eigen::NoChange);
@@ -705,8 +707,7 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
   // Fit residual (3D marker distance, RMS) over the frames used.
   double sum = 0;
   for (int64_t r = 0; r < rows; ++r) {
-    const Eigen::VectorXd pred =
-        model.shape.Predict(model.shape.angle_pca.Params(angles.row(r).transpose()));
+    const Eigen::VectorXd pred = model.shape.Predict(model.shape.angle_pca.Params(angles.row(r).transpose()));
     sum += (pred - coords.row(r).transpose()).squaredNorm();
   }
   if (options.gaussian_fill && fill_rows.size() >= 2) {
@@ -729,9 +730,8 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
   const int nm = nf + nh;
   const int p = model.num_parameters();
   if (take.markers() != nm) {
-    throw InvalidInput("hand inversion: the take has " + std::to_string(take.markers()) +
-                       " columns, the model has " + std::to_string(nm) + " (" + std::to_string(nf) +
-                       " forearm + " + std::to_string(nh) + " hand)");
+    throw InvalidInput("hand inversion: the take has " + std::to_string(take.markers()) + " columns, the model has " +
+                       std::to_string(nm) + " (" + std::to_string(nf) + " forearm + " + std::to_string(nh) + " hand)");
   }
   if (model.shape.regression.coefficients.cols() != 3 * nh || model.param_scale.size() != p ||
       model.shape.regression.num_angles != model.shape.angle_pca.mean.size()) {
@@ -784,7 +784,8 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
   Eigen::Matrix3Xd fill_local(3, nh);
 
   for (int64_t f = 0; f < frames; ++f) {
-    if (progress && f % 512 == 0) progress->Update("hand inversion", static_cast<double>(f) / static_cast<double>(frames));
+    if (progress && f % 512 == 0)
+      progress->Update("hand inversion", static_cast<double>(f) / static_cast<double>(frames));
     int vis_f = 0, vis_h = 0;
     for (int j = 0; j < nm; ++j) {
       const float* pt = take.at(f, j);

@@ -34,10 +34,9 @@
 // drops with a warning); its frame is Rparent·Q·Ry(flexion)·Rz(spread), so its
 // own children see a twist-free chain. Its rest Q is Ry(f̄)·Rz(s̄) of its mean
 // direction. Angles: 3 per segment, in segment order: flexion, spread, twist (radians).
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/progress.h"
 #include "core/take.h"
@@ -64,7 +63,7 @@ struct HandLayout {
 };
 
 struct HandModelOptions {
-  int angle_components = 12;        // naH (the seed retains 12)
+  int angle_components = 12;  // naH (the seed retains 12)
   // true: the angle PCA is weighted by each angle's effect on the markers
   // (w_i = RMS marker displacement per radian of angle i at its mean, from a
   // first regression on the measured angles): the naH directions are those
@@ -74,7 +73,7 @@ struct HandModelOptions {
   // to uncorrelated parameters; variance_explained stays a fraction of the
   // total (unweighted) angle variance. false: the seed's plain angle PCA.
   bool weighted_angle_pca = true;
-  double min_distance_mm = 2.0;     // training-frame selection
+  double min_distance_mm = 2.0;  // training-frame selection
   // true: also fit HandModel::fill, the Gaussian gap filler of the hand
   // markers in the forearm frame (gaussian_fill.h), by EM on the training
   // frames where at least half the hand markers are seen (complete or not),
@@ -82,8 +81,8 @@ struct HandModelOptions {
   // last kept frame has moved by min_distance_mm.
   bool gaussian_fill = true;
   GaussianFillOptions fill;
-  HandRegressionOptions regression; // ridge etc. (documented in hand_regression.h)
-  RigidModelOptions forearm;        // forearm cluster fit and motion PCA (nmH)
+  HandRegressionOptions regression;  // ridge etc. (documented in hand_regression.h)
+  RigidModelOptions forearm;         // forearm cluster fit and motion PCA (nmH)
 };
 
 struct HandModel {
@@ -93,7 +92,7 @@ struct HandModel {
   // Per segment: rest orientation relative to its parent (see above), fitted
   // on the training frames. Empty = identity for every segment.
   std::vector<Eigen::Matrix3d> rest;
-  HandShapeModel shape;                  // naH params → hand coordinates (forearm frame, 3 × hand markers)
+  HandShapeModel shape;  // naH params → hand coordinates (forearm frame, 3 × hand markers)
   // Scale of each PCA parameter (its training sd): inversion works on
   // params / scale so that InversionOptions::prior_mm is per unit sd.
   Eigen::VectorXd param_scale;
@@ -136,7 +135,7 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
 // misfits by millimetres, so unweighted hand residuals would tilt the forearm.
 // A warm start ending with an RMS above 3 · info.training_rms_mm + 1 mm is
 // retried from a cold start (Kabsch + measured angles) and the better kept.
-InversionResult InvertHand(const HandModel& model, const MarkerArray& take,
-                           const InversionOptions& options = {}, Progress* progress = nullptr);
+InversionResult InvertHand(const HandModel& model, const MarkerArray& take, const InversionOptions& options = {},
+                           Progress* progress = nullptr);
 
 }  // namespace csw

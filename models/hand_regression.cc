@@ -1,10 +1,9 @@
 #include "models/hand_regression.h"
 
-#include <cmath>
-#include <string>
-
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
+#include <cmath>
+#include <string>
 
 #include "core/error.h"
 #include "models/joint_angles.h"
@@ -105,8 +104,8 @@ HandRegression FitHandRegression(const Eigen::MatrixXd& angles, const Eigen::Mat
     out.rank = static_cast<int>(cod.rank());
     beta = cod.solve(yc);
     if (out.rank < k) {
-      out.warnings.push_back("features are rank-deficient (rank " + std::to_string(out.rank) +
-                             " of " + std::to_string(k) + "): minimum-norm solution");
+      out.warnings.push_back("features are rank-deficient (rank " + std::to_string(out.rank) + " of " +
+                             std::to_string(k) + "): minimum-norm solution");
     }
   } else {
     Eigen::MatrixXd za(frames + k, k);
@@ -160,8 +159,8 @@ AnglePca FitAnglePca(const Eigen::MatrixXd& angles, int components) {
   if (n == 0) throw InvalidInput("angle PCA: no angles");
   if (!angles.allFinite()) throw InvalidInput("angle PCA: a non-finite angle");
   if (components < 1 || components > n) {
-    throw InvalidInput("angle PCA: asks for " + std::to_string(components) +
-                       " components, allowed 1.." + std::to_string(n));
+    throw InvalidInput("angle PCA: asks for " + std::to_string(components) + " components, allowed 1.." +
+                       std::to_string(n));
   }
   AnglePca pca;
   pca.mean.resize(n);
@@ -206,8 +205,7 @@ HandShapeModel FitHandShapeModel(const Eigen::MatrixXd& angles, const Eigen::Mat
   model.angle_pca = FitAnglePca(angles, angle_components);
   Eigen::MatrixXd predicted(angles.rows(), angles.cols());
   for (Eigen::Index f = 0; f < angles.rows(); ++f) {
-    predicted.row(f) =
-        model.angle_pca.Angles(model.angle_pca.Params(angles.row(f).transpose())).transpose();
+    predicted.row(f) = model.angle_pca.Angles(model.angle_pca.Params(angles.row(f).transpose())).transpose();
   }
   model.regression = FitHandRegression(predicted, coordinates, options);
   return model;

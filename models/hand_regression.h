@@ -8,10 +8,9 @@
 // seed's naH parameters): ang = mean_A + paH · eigv_A.
 //
 // Estimating angles from visible markers (the inverse problem) is not here.
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace csw {
 
@@ -28,8 +27,8 @@ struct HandRegressionOptions {
 struct HandRegression {
   Eigen::MatrixXd coefficients;  // (1 + 2n) × D, rows in feature order
   int num_angles = 0;
-  int rank = 0;                  // numerical rank of the non-constant features
-  double rms_residual = 0;       // over the training coordinates
+  int rank = 0;             // numerical rank of the non-constant features
+  double rms_residual = 0;  // over the training coordinates
   std::vector<std::string> warnings;
 
   // One frame: n angles (radians) → D coordinates. Throws InvalidInput on a size mismatch.
@@ -55,9 +54,9 @@ HandRegression FitHandRegression(const Eigen::MatrixXd& angles, const Eigen::Mat
 // wrapped to (−π, π] (angles that cross ±π do not jump), then centred on their
 // own mean; mean = circular mean + that shift.
 struct AnglePca {
-  Eigen::VectorXd mean;           // n: centre of each angle (see above), (−π, π]
-  Eigen::MatrixXd components;     // n × k, orthonormal columns, largest variance first
-  Eigen::VectorXd variances;      // k: variance of each parameter (rad², divisor frames − 1)
+  Eigen::VectorXd mean;                    // n: centre of each angle (see above), (−π, π]
+  Eigen::MatrixXd components;              // n × k, orthonormal columns, largest variance first
+  Eigen::VectorXd variances;               // k: variance of each parameter (rad², divisor frames − 1)
   std::vector<double> variance_explained;  // k: fraction of the total angle variance
 
   int num_parameters() const { return static_cast<int>(components.cols()); }

@@ -115,9 +115,9 @@ int64_t CorrectGapsWithEdgeResiduals(const MarkerArray& input, InversionResult* 
           add = (1 - t) * left + t * right;
         } else {
           const int64_t distance = has_left ? g - a + 1 : b - g;
-          const double w = fade_frames > 0 ? std::max(0.0, 1.0 - static_cast<double>(distance) /
-                                                                   static_cast<double>(fade_frames))
-                                           : 1.0;
+          const double w = fade_frames > 0
+                               ? std::max(0.0, 1.0 - static_cast<double>(distance) / static_cast<double>(fade_frames))
+                               : 1.0;
           add = w * (has_left ? left : right);
         }
         for (int k = 0; k < 3; ++k) p[k] = static_cast<float>(p[k] + add(k));

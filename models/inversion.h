@@ -11,18 +11,17 @@
 // The caller (workbench/jobs) binds the marker set and passes, per take, a
 // MarkerArray whose columns are the model's markers in the model's order
 // (cluster markers first, then shape markers; see each model's layout).
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/take.h"
 
 namespace csw {
 
 struct InversionOptions {
-  int max_iterations = 30;          // Levenberg-Marquardt iterations per frame
-  bool warm_start = true;           // start from the previous solved frame
+  int max_iterations = 30;  // Levenberg-Marquardt iterations per frame
+  bool warm_start = true;   // start from the previous solved frame
   // Tikhonov prior on the shape parameters, as a weight in mm per unit of
   // parameter (parameters are normalised to unit sd on the training frames):
   // adds residuals prior_mm · p_k. Keeps frames with few visible markers from
@@ -38,8 +37,8 @@ struct InversionOptions {
 };
 
 struct InversionResult {
-  Eigen::MatrixXd pose;     // frames × 6: rx ry rz (rad) tx ty tz (mm), cluster frame → lab; NaN when unsolved
-  Eigen::MatrixXd params;   // frames × P shape parameters; NaN when unsolved
+  Eigen::MatrixXd pose;       // frames × 6: rx ry rz (rad) tx ty tz (mm), cluster frame → lab; NaN when unsolved
+  Eigen::MatrixXd params;     // frames × P shape parameters; NaN when unsolved
   MarkerArray reconstructed;  // frames × model markers (cluster then shape), lab mm; NaN when unsolved
   // frames × model markers: |reconstructed − observed| in mm where the input
   // sample is visible, NaN elsewhere (missing input or unsolved frame).
@@ -58,8 +57,8 @@ struct ErrorStats {
 
 // Statistics of the finite entries of error_mm restricted to the given columns
 // (empty = all columns) and rows [first, first + count) (count < 0 = to the end).
-ErrorStats SummariseErrors(const Eigen::MatrixXd& error_mm, const std::vector<int>& columns = {},
-                           int64_t first = 0, int64_t count = -1);
+ErrorStats SummariseErrors(const Eigen::MatrixXd& error_mm, const std::vector<int>& columns = {}, int64_t first = 0,
+                           int64_t count = -1);
 
 // Marker arrays (frames × markers) → per-sample Euclidean distance (mm),
 // NaN where either is missing. Throws InvalidInput on a shape mismatch.

@@ -1,14 +1,12 @@
 #include "models/joint_angles.h"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
 
-#include <Eigen/Geometry>
-
 namespace csw {
 
-std::optional<SegmentFrame> FrameFromMarkers(const Eigen::Vector3d& origin,
-                                             const Eigen::Vector3d& toward_x,
+std::optional<SegmentFrame> FrameFromMarkers(const Eigen::Vector3d& origin, const Eigen::Vector3d& toward_x,
                                              const Eigen::Vector3d& in_plane) {
   if (!origin.allFinite() || !toward_x.allFinite() || !in_plane.allFinite()) return std::nullopt;
   const Eigen::Vector3d ax = toward_x - origin;

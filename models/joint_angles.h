@@ -16,9 +16,8 @@
 // Gimbal lock is at spread = ±π/2 (a finger abducted by 90°, which does not
 // occur in practice); there twist is set to 0 and the whole rotation about the
 // common axis is reported as flexion, with `gimbal_lock` set.
-#include <optional>
-
 #include <Eigen/Core>
+#include <optional>
 
 namespace csw {
 
@@ -30,8 +29,7 @@ struct SegmentFrame {
 // The frame of three markers, or nullopt when they do not define one: a
 // non-finite coordinate, the second marker on the origin, or the three markers
 // (nearly) collinear — |sin(angle at the origin)| < 1e-9.
-std::optional<SegmentFrame> FrameFromMarkers(const Eigen::Vector3d& origin,
-                                             const Eigen::Vector3d& toward_x,
+std::optional<SegmentFrame> FrameFromMarkers(const Eigen::Vector3d& origin, const Eigen::Vector3d& toward_x,
                                              const Eigen::Vector3d& in_plane);
 
 struct JointAngles {

@@ -1,9 +1,8 @@
 #include "models/pca.h"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <string>
-
-#include <Eigen/SVD>
 
 #include "core/error.h"
 
@@ -31,8 +30,8 @@ Pca FitAll(const Eigen::MatrixXd& x) {
     pca.components.col(c).cwiseAbs().maxCoeff(&arg);
     if (pca.components(arg, c) < 0.0) pca.components.col(c) *= -1.0;
   }
-  pca.explained_fraction = pca.total_variance > 0.0 ? Eigen::VectorXd(pca.variances / pca.total_variance)
-                                                    : Eigen::VectorXd::Zero(k);
+  pca.explained_fraction =
+      pca.total_variance > 0.0 ? Eigen::VectorXd(pca.variances / pca.total_variance) : Eigen::VectorXd::Zero(k);
   return pca;
 }
 

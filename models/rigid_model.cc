@@ -8,10 +8,10 @@
 namespace csw {
 
 RigidModel FitRigidModel(const std::string& name, const std::vector<std::string>& markers,
-                         const std::vector<MarkerArray>& takes, const RigidModelOptions& options,
-                         Progress* progress) {
+                         const std::vector<MarkerArray>& takes, const RigidModelOptions& options, Progress* progress) {
   const auto n = static_cast<int64_t>(markers.size());
-  if (n < 3) throw InvalidInput(name + " model: a rigid cluster needs at least 3 markers (has " + std::to_string(n) + ")");
+  if (n < 3)
+    throw InvalidInput(name + " model: a rigid cluster needs at least 3 markers (has " + std::to_string(n) + ")");
   if (takes.empty()) throw InvalidInput(name + " model: no training take");
   int64_t frames = 0;
   for (size_t i = 0; i < takes.size(); ++i) {
@@ -37,8 +37,8 @@ RigidModel FitRigidModel(const std::string& name, const std::vector<std::string>
   try {
     model.reference = ClusterReference(all, columns);
   } catch (const InvalidInput&) {
-    throw InvalidInput(name + " model: no training frame has every cluster marker visible (" +
-                       std::to_string(frames) + " frames)");
+    throw InvalidInput(name + " model: no training frame has every cluster marker visible (" + std::to_string(frames) +
+                       " frames)");
   }
   const RigidSeries series = EstimateRigidSeries(all, columns, model.reference, options.rigid, progress);
   const Eigen::MatrixXd params = series.ValidParameters();

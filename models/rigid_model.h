@@ -2,11 +2,10 @@
 // A rigid cluster model (head or forearm): the cluster's reference shape and
 // the PCA of its 6 motion parameters over the training frames — the seed's
 // motion control parameters nmF (head) / nmH (forearm).
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/progress.h"
 #include "core/take.h"
@@ -22,9 +21,9 @@ struct ModelInfo {
   std::string config_json;                  // the configuration used, as JSON text
   std::string created_utc;                  // ISO 8601
   std::string csw_version;
-  int64_t training_frames = 0;              // complete frames offered
-  int64_t selected_frames = 0;              // kept by training-frame selection
-  double training_rms_mm = 0;               // fit residual over the selected frames
+  int64_t training_frames = 0;  // complete frames offered
+  int64_t selected_frames = 0;  // kept by training-frame selection
+  double training_rms_mm = 0;   // fit residual over the selected frames
 };
 
 struct RigidModel {

@@ -1,14 +1,14 @@
 #include "models/rigid_motion.h"
 
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <string>
-
-#include <Eigen/SVD>
-#include <ceres/ceres.h>
-#include <ceres/rotation.h>
 
 #include "core/error.h"
 
@@ -187,9 +187,9 @@ RigidFit EstimateRigid(const Eigen::Matrix3Xd& reference, const Eigen::Matrix3Xd
     ceres::LossFunction* loss = nullptr;
     if (options.loss == RobustLoss::kHuber) loss = new ceres::HuberLoss(options.loss_scale_mm);
     if (options.loss == RobustLoss::kCauchy) loss = new ceres::CauchyLoss(options.loss_scale_mm);
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<MarkerResidual, 3, 6>(
-                                 new MarkerResidual(reference.col(c), observed.col(c))),
-                             loss, pose.data());
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<MarkerResidual, 3, 6>(new MarkerResidual(reference.col(c), observed.col(c))),
+        loss, pose.data());
   }
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::DENSE_QR;
@@ -274,8 +274,7 @@ Eigen::MatrixXd RigidSeries::ValidParameters() const {
 }
 
 RigidSeries EstimateRigidSeries(const MarkerArray& markers, const std::vector<int>& cluster_columns,
-                                const Eigen::Matrix3Xd& reference, const RigidOptions& options,
-                                Progress* progress) {
+                                const Eigen::Matrix3Xd& reference, const RigidOptions& options, Progress* progress) {
   const Eigen::Index n = static_cast<Eigen::Index>(cluster_columns.size());
   if (reference.cols() != n) {
     throw InvalidInput("rigid series: reference has " + std::to_string(reference.cols()) + " markers, cluster has " +
@@ -297,7 +296,8 @@ RigidSeries EstimateRigidSeries(const MarkerArray& markers, const std::vector<in
   s.converged.assign(static_cast<size_t>(frames), 0);
   Eigen::Matrix3Xd obs(3, n);
   for (int64_t f = 0; f < frames; ++f) {
-    if (progress && f % 1024 == 0) progress->Update("rigid motion", static_cast<double>(f) / static_cast<double>(frames));
+    if (progress && f % 1024 == 0)
+      progress->Update("rigid motion", static_cast<double>(f) / static_cast<double>(frames));
     for (Eigen::Index i = 0; i < n; ++i) {
       const float* p = markers.at(f, cluster_columns[static_cast<size_t>(i)]);
       obs.col(i) << p[0], p[1], p[2];  // NaN stays NaN

@@ -7,11 +7,10 @@
 //
 // Convention: observed = R * reference + t (reference in the cluster frame,
 // observed in the lab frame). ToLocalFrame applies the inverse motion.
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
 
 #include "core/progress.h"
 #include "core/take.h"
@@ -41,9 +40,9 @@ struct RigidFit {
   bool valid = false;      // false with fewer than 3 usable, non-collinear markers
   bool converged = false;  // Ceres reported convergence (true for kNone: closed form)
   RigidTransform transform;
-  double rms_mm = 0.0;                    // over the used markers
+  double rms_mm = 0.0;                     // over the used markers
   Eigen::VectorXd per_marker_residual_mm;  // |R ref + t - obs|, NaN when not visible
-  std::vector<int> used_markers;          // columns that were visible in both
+  std::vector<int> used_markers;           // columns that were visible in both
 };
 
 // Closed-form least-squares fit (Kabsch, with the reflection fix) of

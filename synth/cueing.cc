@@ -12,22 +12,16 @@ struct Group {
 };
 
 constexpr Group kShapes[] = {
-    {"p", 1}, {"d", 1}, {"ʒ", 1},
-    {"k", 2}, {"v", 2}, {"z", 2},
-    {"s", 3}, {"ʁ", 3},
-    {"b", 4}, {"n", 4}, {"ɥ", 4},
-    {"t", 5}, {"m", 5}, {"f", 5},
-    {"l", 6}, {"ʃ", 6}, {"ɲ", 6}, {"w", 6},
-    {"ɡ", 7}, {"g", 7},  // U+0261 and the ASCII letter some sources write
+    {"p", 1}, {"d", 1}, {"ʒ", 1}, {"k", 2}, {"v", 2}, {"z", 2}, {"s", 3}, {"ʁ", 3}, {"b", 4}, {"n", 4}, {"ɥ", 4},
+    {"t", 5}, {"m", 5}, {"f", 5}, {"l", 6}, {"ʃ", 6}, {"ɲ", 6}, {"w", 6}, {"ɡ", 7}, {"g", 7},  // U+0261 and the ASCII
+                                                                                               // letter some sources
+                                                                                               // write
     {"j", 8}, {"ŋ", 8},
 };
 
 constexpr Group kPlacements[] = {
-    {"a", 1}, {"o", 1}, {"œ", 1}, {"ə", 1},
-    {"ɛ̃", 2}, {"ø", 2},
-    {"i", 3}, {"ɔ̃", 3}, {"ɑ̃", 3},
-    {"ɛ", 4}, {"u", 4}, {"ɔ", 4},
-    {"y", 5}, {"e", 5}, {"œ̃", 5},
+    {"a", 1}, {"o", 1}, {"œ", 1}, {"ə", 1}, {"ɛ̃", 2}, {"ø", 2}, {"i", 3}, {"ɔ̃", 3},
+    {"ɑ̃", 3}, {"ɛ", 4}, {"u", 4}, {"ɔ", 4}, {"y", 5}, {"e", 5}, {"œ̃", 5},
 };
 
 int Lookup(const Group* begin, const Group* end, const std::string& ipa) {
@@ -48,13 +42,9 @@ Key RestKey(double a1_s, double end_s) {
 
 std::string Key::Code() const { return std::to_string(placement) + std::to_string(shape); }
 
-int ConsonantShape(const std::string& ipa) {
-  return Lookup(std::begin(kShapes), std::end(kShapes), ipa);
-}
+int ConsonantShape(const std::string& ipa) { return Lookup(std::begin(kShapes), std::end(kShapes), ipa); }
 
-int VowelPlacement(const std::string& ipa) {
-  return Lookup(std::begin(kPlacements), std::end(kPlacements), ipa);
-}
+int VowelPlacement(const std::string& ipa) { return Lookup(std::begin(kPlacements), std::end(kPlacements), ipa); }
 
 bool IsVowel(const std::string& ipa) { return VowelPlacement(ipa) != 0; }
 bool IsConsonant(const std::string& ipa) { return ConsonantShape(ipa) != 0; }

@@ -20,9 +20,12 @@ struct NamedMovement {
 };
 
 constexpr NamedMovement kMovements[] = {
-    {"placement_cv", &PhasingModel::placement_cv}, {"shape_cv", &PhasingModel::shape_cv},
-    {"placement_v", &PhasingModel::placement_v},   {"shape_v", &PhasingModel::shape_v},
-    {"placement_c", &PhasingModel::placement_c},   {"shape_c", &PhasingModel::shape_c},
+    {"placement_cv", &PhasingModel::placement_cv},
+    {"shape_cv", &PhasingModel::shape_cv},
+    {"placement_v", &PhasingModel::placement_v},
+    {"shape_v", &PhasingModel::shape_v},
+    {"placement_c", &PhasingModel::placement_c},
+    {"shape_c", &PhasingModel::shape_c},
     {"rest", &PhasingModel::rest},
 };
 
@@ -40,9 +43,7 @@ std::string CheckMovement(const char* name, const MovementTiming& m) {
 }
 
 // Uniform in (0, 1) from 53 random bits.
-double Uniform01(std::mt19937_64& rng) {
-  return (static_cast<double>(rng() >> 11) + 0.5) * (1.0 / 9007199254740992.0);
-}
+double Uniform01(std::mt19937_64& rng) { return (static_cast<double>(rng() >> 11) + 0.5) * (1.0 / 9007199254740992.0); }
 
 // Applies the constraints to one movement: start >= lower (the previous key's
 // target; -inf for none), target - start >= min_s. When only the duration is too
@@ -98,9 +99,8 @@ std::vector<KeyTiming> Timing(const std::vector<Key>& keys, const PhasingModel& 
     }
   }
   // Leading rest keys: the hand is at rest until the first movement starts.
-  const double leave =
-      first_cued < 0 ? (keys.empty() ? 0.0 : keys.front().a1_s)
-                     : std::min(out[first_cued].placement_start_s, out[first_cued].shape_start_s);
+  const double leave = first_cued < 0 ? (keys.empty() ? 0.0 : keys.front().a1_s)
+                                      : std::min(out[first_cued].placement_start_s, out[first_cued].shape_start_s);
   for (size_t i = 0; i < keys.size() && (first_cued < 0 || static_cast<int>(i) < first_cued); ++i)
     out[i] = {leave, leave, leave, leave};
   return out;
@@ -187,20 +187,28 @@ void SavePhasingModel(const PhasingModel& model, const std::string& path) {
 
 const MovementTiming& PlacementTiming(const PhasingModel& model, KeyType type) {
   switch (type) {
-    case KeyType::kCV: return model.placement_cv;
-    case KeyType::kVowelAlone: return model.placement_v;
-    case KeyType::kConsonantAlone: return model.placement_c;
-    case KeyType::kRest: break;
+    case KeyType::kCV:
+      return model.placement_cv;
+    case KeyType::kVowelAlone:
+      return model.placement_v;
+    case KeyType::kConsonantAlone:
+      return model.placement_c;
+    case KeyType::kRest:
+      break;
   }
   return model.rest;
 }
 
 const MovementTiming& ShapeTiming(const PhasingModel& model, KeyType type) {
   switch (type) {
-    case KeyType::kCV: return model.shape_cv;
-    case KeyType::kVowelAlone: return model.shape_v;
-    case KeyType::kConsonantAlone: return model.shape_c;
-    case KeyType::kRest: break;
+    case KeyType::kCV:
+      return model.shape_cv;
+    case KeyType::kVowelAlone:
+      return model.shape_v;
+    case KeyType::kConsonantAlone:
+      return model.shape_c;
+    case KeyType::kRest:
+      break;
   }
   return model.rest;
 }
@@ -217,8 +225,8 @@ double SampleTruncatedNormal(double mean, double sd, double k, std::mt19937_64& 
   return mean;  // unreachable in practice for k > 0.1
 }
 
-std::vector<KeyTiming> SampleTiming(const std::vector<Key>& keys, const PhasingModel& model,
-                                    std::mt19937_64& rng, TimingMode mode) {
+std::vector<KeyTiming> SampleTiming(const std::vector<Key>& keys, const PhasingModel& model, std::mt19937_64& rng,
+                                    TimingMode mode) {
   return Timing(
       keys, model, [&](double mean, double sd) { return SampleTruncatedNormal(mean, sd, model.truncate_sd, rng); },
       mode == TimingMode::kSequential);
@@ -235,10 +243,17 @@ PhasingMeans MeasurePhasing(const std::vector<Key>& keys, const std::vector<KeyT
   for (size_t i = 0; i < n; ++i) {
     int slot = -1;
     switch (keys[i].type) {
-      case KeyType::kCV: slot = 0; break;
-      case KeyType::kVowelAlone: slot = 1; break;
-      case KeyType::kConsonantAlone: slot = 2; break;
-      case KeyType::kRest: break;
+      case KeyType::kCV:
+        slot = 0;
+        break;
+      case KeyType::kVowelAlone:
+        slot = 1;
+        break;
+      case KeyType::kConsonantAlone:
+        slot = 2;
+        break;
+      case KeyType::kRest:
+        break;
     }
     if (slot < 0) continue;
     const KeyTiming& t = timing[i];
@@ -270,8 +285,7 @@ PhasingMeans MeasurePhasing(const std::vector<Key>& keys, const std::vector<KeyT
   return out;
 }
 
-PhasingModel CalibratePhasing(const std::vector<Key>& keys, const PhasingModel& target, uint64_t seed,
-                              int iterations) {
+PhasingModel CalibratePhasing(const std::vector<Key>& keys, const PhasingModel& target, uint64_t seed, int iterations) {
   if (std::string why = target.Check(); !why.empty()) throw InvalidInput("phasing model: " + why);
   PhasingModel model = target;
   struct Pair {

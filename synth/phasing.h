@@ -3,11 +3,10 @@
 // and reach their targets, relative to the key's acoustic onset A1
 // (../shared/docs/cued-speech.md, "Timing"; docs/phonetics.md, "Phasing").
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "synth/cueing.h"
 
@@ -51,7 +50,7 @@ nlohmann::json PhasingModelToJson(const PhasingModel& model);
 // Throws csw::ParseError naming `source` when a field is missing, not a number,
 // or the model fails Check(). Missing movements keep their defaults.
 PhasingModel PhasingModelFromJson(const nlohmann::json& json, const std::string& source = "<json>");
-PhasingModel LoadPhasingModel(const std::string& path);        // throws IoError / ParseError
+PhasingModel LoadPhasingModel(const std::string& path);                     // throws IoError / ParseError
 void SavePhasingModel(const PhasingModel& model, const std::string& path);  // throws IoError
 
 // Absolute times (seconds, same clock as the keys' a1_s) of one key's movements.
@@ -77,8 +76,8 @@ const MovementTiming& ShapeTiming(const PhasingModel& model, KeyType type);
 // duration holds): movements then overlap and the drawn times keep the model's
 // means exactly; the virtual cuer blends overlapping gestures by superposition.
 enum class TimingMode { kSequential, kOverlapping };
-std::vector<KeyTiming> SampleTiming(const std::vector<Key>& keys, const PhasingModel& model,
-                                    std::mt19937_64& rng, TimingMode mode = TimingMode::kSequential);
+std::vector<KeyTiming> SampleTiming(const std::vector<Key>& keys, const PhasingModel& model, std::mt19937_64& rng,
+                                    TimingMode mode = TimingMode::kSequential);
 
 // The mean timing (every draw at its mean, same constraints).
 std::vector<KeyTiming> MeanTiming(const std::vector<Key>& keys, const PhasingModel& model);

@@ -28,60 +28,101 @@ struct EspeakEntry {
 
 constexpr EspeakEntry kEspeakTable[] = {
     // French vowels (phoneme table "fr").
-    {"a", "a"}, {"a-", "a"}, {"a:", "a"}, {"a#", "a"},
-    {"e", "e"}, {"e-", "e"},
-    {"E", "ɛ"}, {"E-", "ɛ"},
+    {"a", "a"},
+    {"a-", "a"},
+    {"a:", "a"},
+    {"a#", "a"},
+    {"e", "e"},
+    {"e-", "e"},
+    {"E", "ɛ"},
+    {"E-", "ɛ"},
     {"i", "i"},
     {"o", "o"},
     {"O", "ɔ"},
-    {"u", "u"}, {"u:", "u"},
-    {"y", "y"}, {"y-", "y"}, {"j.", "y"},
+    {"u", "u"},
+    {"u:", "u"},
+    {"y", "y"},
+    {"y-", "y"},
+    {"j.", "y"},
     {"Y", "ø"},
-    {"W", "œ"}, {"W2", "œ"},
-    {"@", "ə"}, {"@-", "ə"},
+    {"W", "œ"},
+    {"W2", "œ"},
+    {"@", "ə"},
+    {"@-", "ə"},
     {"A~", "ɑ̃"},
     {"E~", "ɛ̃"},
     {"O~", "ɔ̃"},
     {"W~", "œ̃"},
     // French consonants and semi-vowels (liaison variants "z2", "t2", "n2", "r2",
     // "p2" are pronounced when espeak-ng emits them).
-    {"p", "p"}, {"p2", "p"},
+    {"p", "p"},
+    {"p2", "p"},
     {"b", "b"},
-    {"t", "t"}, {"t2", "t"}, {"t3", "t"},
+    {"t", "t"},
+    {"t2", "t"},
+    {"t3", "t"},
     {"d", "d"},
     {"k", "k"},
     {"g", "ɡ"},
     {"f", "f"},
     {"v", "v"},
     {"s", "s"},
-    {"z", "z"}, {"z2", "z"}, {"z3", "s"},
+    {"z", "z"},
+    {"z2", "z"},
+    {"z3", "s"},
     {"S", "ʃ"},
     {"Z", "ʒ"},
     {"m", "m"},
-    {"n", "n"}, {"n2", "n"},
+    {"n", "n"},
+    {"n2", "n"},
     {"n^", "ɲ"},
     {"N", "ŋ"},
-    {"l", "l"}, {"l/", "l"}, {"l/2", "l"},
-    {"r", "ʁ"}, {"r/", "ʁ"}, {"r/2", "ʁ"}, {"r2", "ʁ"}, {"R", "ʁ"},
-    {"j", "j"}, {"j/", "j"},
-    {"w", "w"}, {"w/", "w"},
+    {"l", "l"},
+    {"l/", "l"},
+    {"l/2", "l"},
+    {"r", "ʁ"},
+    {"r/", "ʁ"},
+    {"r/2", "ʁ"},
+    {"r2", "ʁ"},
+    {"R", "ʁ"},
+    {"j", "j"},
+    {"j/", "j"},
+    {"w", "w"},
+    {"w/", "w"},
     {"dZ", "d ʒ"},
     {"tS", "t ʃ"},
     {"ts", "t s"},
     // Foreign phonemes reached through espeak-ng's language switches, e.g.
     // "(en)" for "week-end", "parking": nearest French phonemes.
-    {"I", "i"}, {"I2", "i"}, {"I#", "i"}, {"i:", "i"},
-    {"A:", "a"}, {"A@", "a"}, {"aa", "a"}, {"a2", "a"},
+    {"I", "i"},
+    {"I2", "i"},
+    {"I#", "i"},
+    {"i:", "i"},
+    {"A:", "a"},
+    {"A@", "a"},
+    {"aa", "a"},
+    {"a2", "a"},
     {"V", "œ"},
-    {"0", "ɔ"}, {"O:", "ɔ"}, {"O@", "ɔ"}, {"o@", "ɔ"},
+    {"0", "ɔ"},
+    {"O:", "ɔ"},
+    {"O@", "ɔ"},
+    {"o@", "ɔ"},
     {"U", "u"},
-    {"3", "ə"}, {"3:", "œ"},
-    {"e:", "e"}, {"e@", "ɛ"}, {"i@", "i"}, {"U@", "u"},
+    {"3", "ə"},
+    {"3:", "œ"},
+    {"e:", "e"},
+    {"e@", "ɛ"},
+    {"i@", "i"},
+    {"U@", "u"},
     {"oU", "o"},
-    {"aI", "a j"}, {"eI", "e j"}, {"OI", "ɔ j"}, {"aU", "a w"},
+    {"aI", "a j"},
+    {"eI", "e j"},
+    {"OI", "ɔ j"},
+    {"aU", "a w"},
     {"@L", "ə l"},
     {"r-", "ʁ"},
-    {"T", "s"}, {"D", "z"},
+    {"T", "s"},
+    {"D", "z"},
     {"x", "ʁ"},
     {"h", "h"},
     {"?", "ʔ"},
@@ -154,9 +195,8 @@ int SynthCallback(short* wav, int count, espeak_EVENT* events) {
     // mode; `audio_position` is the same instant in whole milliseconds. Use the
     // precise one when both agree, else fall back to milliseconds.
     const double from_ms = e->audio_position * 1e-3 * s.rate_hz;
-    r.sample = std::abs(e->sample - from_ms) <= 0.003 * s.rate_hz
-                   ? e->sample
-                   : static_cast<int64_t>(std::llround(from_ms));
+    r.sample =
+        std::abs(e->sample - from_ms) <= 0.003 * s.rate_hz ? e->sample : static_cast<int64_t>(std::llround(from_ms));
     if (e->type == espeakEVENT_PHONEME) {
       char name[9] = {0};
       std::memcpy(name, e->id.string, 8);
@@ -193,9 +233,7 @@ std::vector<std::pair<std::string, std::string>> EspeakIpaTable() {
   return out;
 }
 
-bool IsEspeakPause(const std::string& espeak_name) {
-  return !espeak_name.empty() && espeak_name[0] == '_';
-}
+bool IsEspeakPause(const std::string& espeak_name) { return !espeak_name.empty() && espeak_name[0] == '_'; }
 
 std::string EspeakToIpa(const std::string& espeak_name) {
   if (IsEspeakPause(espeak_name)) return "";
@@ -228,8 +266,8 @@ Utterance Phonetise(const std::string& text, const PhonetiseOptions& options) {
   s.events.clear();
   // Text up to the first NUL (espeak-ng reads a C string).
   const std::string input(text.c_str());
-  const espeak_ERROR err = espeak_Synth(input.c_str(), input.size() + 1, 0, POS_CHARACTER, 0,
-                                        espeakCHARS_UTF8, nullptr, nullptr);
+  const espeak_ERROR err =
+      espeak_Synth(input.c_str(), input.size() + 1, 0, POS_CHARACTER, 0, espeakCHARS_UTF8, nullptr, nullptr);
   if (err != EE_OK) throw Error("espeak-ng: synthesis failed (error " + std::to_string(err) + ")");
   espeak_Synchronize();
 
@@ -253,8 +291,7 @@ Utterance Phonetise(const std::string& text, const PhonetiseOptions& options) {
       continue;
     }
     if (e.name.empty() || e.name[0] == '(') continue;
-    segs.push_back({e.name, std::clamp<int64_t>(e.sample, 0, total),
-                    static_cast<int>(word_events.size()) - 1});
+    segs.push_back({e.name, std::clamp<int64_t>(e.sample, 0, total), static_cast<int>(word_events.size()) - 1});
   }
 
   std::vector<int> word_map(word_events.size(), -1);  // raw word -> Utterance::words index
@@ -313,8 +350,7 @@ Utterance Phonetise(const std::string& text, const PhonetiseOptions& options) {
     // Several phonemes for one espeak-ng phoneme share its duration equally.
     const auto n = static_cast<int64_t>(ipa.size());
     for (int64_t k = 0; k < n; ++k)
-      add_phone(ipa[k], g.name, g.start + (end - g.start) * k / n, g.start + (end - g.start) * (k + 1) / n,
-                g.raw_word);
+      add_phone(ipa[k], g.name, g.start + (end - g.start) * k / n, g.start + (end - g.start) * (k + 1) / n, g.raw_word);
   }
   if (u.phones.empty() && total > 0) add_phone("", "_", 0, total, -1);
   ApplyIpaExceptions(u.phones);

@@ -14,7 +14,7 @@ struct Phone {
   std::string espeak;    // espeak-ng's own phoneme name, e.g. "a~"
   double start_s = 0.0;  // position in the audio
   double end_s = 0.0;
-  int word = -1;         // index into Utterance::words, -1 for pauses
+  int word = -1;  // index into Utterance::words, -1 for pauses
 };
 
 struct Word {
@@ -35,8 +35,8 @@ struct Utterance {
 
 struct PhonetiseOptions {
   std::string voice = "fr";
-  int rate_wpm = 150;       // espeak-ng words per minute
-  int pitch = 50;           // 0-99
+  int rate_wpm = 150;  // espeak-ng words per minute
+  int pitch = 50;      // 0-99
   bool synthesize_audio = true;
   std::string Check() const;  // "" when valid, else the reason
 };

@@ -17,7 +17,8 @@ cv::Mat Grid(const std::vector<std::string>& files, int columns) {
   for (size_t i = 0; i < files.size(); ++i) {
     row.push_back(cv::imread(files[i]));
     if (static_cast<int>(row.size()) == columns || i + 1 == files.size()) {
-      while (static_cast<int>(row.size()) < columns) row.push_back(cv::Mat(row[0].size(), row[0].type(), cv::Scalar(255, 255, 255)));
+      while (static_cast<int>(row.size()) < columns)
+        row.push_back(cv::Mat(row[0].size(), row[0].type(), cv::Scalar(255, 255, 255)));
       cv::Mat r;
       cv::hconcat(row, r);
       rows.push_back(r);
@@ -91,7 +92,8 @@ int main(int argc, char** argv) {
     // A sentence: one frame and the trajectories.
     const std::vector<std::string> sentences = csw::ShippedSentences();
     csw::SimulationResult r = cuer.SimulateSentence("sentence_001", sentences.at(0));
-    csw::RenderTrajectoryPlotPng((out / "sim_trajectories.png").string(), r, {"MTIP", "ITIP", "FA1", "LLM", "ULM", "THR08"});
+    csw::RenderTrajectoryPlotPng((out / "sim_trajectories.png").string(), r,
+                                 {"MTIP", "ITIP", "FA1", "LLM", "ULM", "THR08"});
     int64_t mid = r.frames() / 2;
     Eigen::Matrix3Xd frame(3, r.take.markers.markers());
     for (int64_t m = 0; m < frame.cols(); ++m)

@@ -199,7 +199,8 @@ void WriteC3d(const std::string& path, const Take& take, const C3dWriteOptions& 
     for (int64_t c = 0; c < channels; ++c) {
       double peak = 0.0;
       for (int64_t i = c; i < static_cast<int64_t>(an.data.size()); i += channels)
-        if (std::isfinite(an.data[static_cast<size_t>(i)])) peak = std::max(peak, std::abs(static_cast<double>(an.data[static_cast<size_t>(i)])));
+        if (std::isfinite(an.data[static_cast<size_t>(i)]))
+          peak = std::max(peak, std::abs(static_cast<double>(an.data[static_cast<size_t>(i)])));
       analog_scale[static_cast<size_t>(c)] = peak > 0 ? static_cast<float>(peak / 32000.0) : 1.0f;
     }
   }

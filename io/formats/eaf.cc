@@ -55,24 +55,22 @@ using Reach = std::pair<double, int64_t>;
 
 class EafReader {
  public:
-  EafReader(const std::string& path, std::vector<std::string>* warnings)
-      : path_(path), warnings_(warnings) {}
+  EafReader(const std::string& path, std::vector<std::string>* warnings) : path_(path), warnings_(warnings) {}
 
   std::vector<LabelTier> Read() {
     bytes_ = formats_internal::ReadFileBytes(path_);
-    if (bytes_.empty())
-      throw ParseError({path_, 0, std::nullopt}, "file is empty; not an EAF file");
+    if (bytes_.empty()) throw ParseError({path_, 0, std::nullopt}, "file is empty; not an EAF file");
     pugi::xml_document doc;
-    pugi::xml_parse_result result = doc.load_buffer(
-        bytes_.data(), bytes_.size(), pugi::parse_default | pugi::parse_ws_pcdata_single);
+    pugi::xml_parse_result result =
+        doc.load_buffer(bytes_.data(), bytes_.size(), pugi::parse_default | pugi::parse_ws_pcdata_single);
     if (!result) {
       throw ParseError(At(result.offset), std::string("malformed XML: ") + result.description());
     }
     pugi::xml_node root = doc.document_element();
     if (std::string_view(root.name()) != "ANNOTATION_DOCUMENT") {
-      throw ParseError(At(root ? root.offset_debug() : 0),
-                       "root element is <" + std::string(root.name()).substr(0, 40) +
-                           ">, not <ANNOTATION_DOCUMENT>; not an EAF file");
+      throw ParseError(At(root ? root.offset_debug() : 0), "root element is <" +
+                                                               std::string(root.name()).substr(0, 40) +
+                                                               ">, not <ANNOTATION_DOCUMENT>; not an EAF file");
     }
     if (pugi::xml_node header = root.child("HEADER")) {
       std::string units = header.attribute("TIME_UNITS").as_string("milliseconds");
@@ -89,8 +87,7 @@ class EafReader {
 
  private:
   Location At(ptrdiff_t offset) const {
-    return {path_, static_cast<int64_t>(offset),
-            formats_internal::LineOfOffset(bytes_, static_cast<int64_t>(offset))};
+    return {path_, static_cast<int64_t>(offset), formats_internal::LineOfOffset(bytes_, static_cast<int64_t>(offset))};
   }
   void Warn(const std::string& w) {
     if (warnings_) warnings_->push_back(w);
@@ -104,10 +101,9 @@ class EafReader {
         if (pugi::xml_attribute value = slot.attribute("TIME_VALUE")) {
           ms = formats_internal::ParseFiniteDouble(formats_internal::Trim(value.as_string()));
           if (!ms || *ms < 0) {
-            throw ParseError(At(slot.offset_debug()),
-                             "time slot '" + id.substr(0, 40) + "': TIME_VALUE '" +
-                                 std::string(value.as_string()).substr(0, 40) +
-                                 "' is not a finite non-negative number");
+            throw ParseError(At(slot.offset_debug()), "time slot '" + id.substr(0, 40) + "': TIME_VALUE '" +
+                                                          std::string(value.as_string()).substr(0, 40) +
+                                                          "' is not a finite non-negative number");
           }
           max_ms_ = std::max(max_ms_, *ms);
         }
@@ -143,8 +139,7 @@ class EafReader {
             for (const std::string* s : {&ann.slot1, &ann.slot2}) {
               if (!slots_.count(*s)) {
                 throw ParseError(At(a.offset_debug()), "annotation '" + ann.id.substr(0, 40) +
-                                                           "' refers to unknown time slot '" +
-                                                           s->substr(0, 40) + "'");
+                                                           "' refers to unknown time slot '" + s->substr(0, 40) + "'");
               }
             }
           } else if (kind == "REF_ANNOTATION") {
@@ -179,8 +174,7 @@ class EafReader {
       }
       const int64_t limit = static_cast<int64_t>(tier.annotations.size()) + 1;
       std::unordered_map<std::string, Reach> back_memo, fwd_memo;
-      auto walk = [&](const std::string& start,
-                      const std::unordered_map<std::string, std::string>& dir,
+      auto walk = [&](const std::string& start, const std::unordered_map<std::string, std::string>& dir,
                       std::unordered_map<std::string, Reach>& memo) -> Reach {
         std::vector<const std::string*> path;
         const std::string* cur = &start;
@@ -216,8 +210,7 @@ class EafReader {
           *why = "unaligned time slot '" + slot + "' has no aligned slot on both sides in its tier";
           return std::nullopt;
         }
-        const double frac =
-            static_cast<double>(back.second) / static_cast<double>(back.second + fwd.second);
+        const double frac = static_cast<double>(back.second) / static_cast<double>(back.second + fwd.second);
         return back.first + (fwd.first - back.first) * frac;
       };
       for (size_t idx : tier.annotations) {
@@ -231,9 +224,8 @@ class EafReader {
         }
         if (*t1 > *t2) {
           if (slots_.at(a.slot1) && slots_.at(a.slot2)) {
-            throw ParseError(At(a.offset), "annotation '" + a.id.substr(0, 40) + "' starts at " +
-                                               FormatDouble(*t1) + " ms, after its end " +
-                                               FormatDouble(*t2) + " ms");
+            throw ParseError(At(a.offset), "annotation '" + a.id.substr(0, 40) + "' starts at " + FormatDouble(*t1) +
+                                               " ms, after its end " + FormatDouble(*t2) + " ms");
           }
           a.state = Annotation::State::kFailed;
           a.why = "interpolated times are reversed";
@@ -362,15 +354,14 @@ class EafReader {
       if (failed > 0) {
         Warn("EAF: tier '" + raw.name + "': " + std::to_string(failed) + " of " +
              std::to_string(raw.annotations.size()) + " annotation(s) could not be aligned and " +
-             (tier.labels.empty() ? "the tier is skipped" : "were skipped") + " (first: '" +
-             first_failed->id + "': " + first_failed->why + ")");
+             (tier.labels.empty() ? "the tier is skipped" : "were skipped") + " (first: '" + first_failed->id +
+             "': " + first_failed->why + ")");
         if (tier.labels.empty()) continue;
       }
       std::stable_sort(tier.labels.begin(), tier.labels.end(),
                        [](const Label& x, const Label& y) { return x.start_s < y.start_s; });
-      const bool all_points =
-          !tier.labels.empty() && std::all_of(tier.labels.begin(), tier.labels.end(),
-                                              [](const Label& l) { return l.start_s == l.end_s; });
+      const bool all_points = !tier.labels.empty() && std::all_of(tier.labels.begin(), tier.labels.end(),
+                                                                  [](const Label& l) { return l.start_s == l.end_s; });
       tier.kind = all_points ? LabelTier::Kind::kPoint : LabelTier::Kind::kInterval;
       out.push_back(std::move(tier));
     }
@@ -398,8 +389,7 @@ std::string NowIso8601() {
 
 std::string MimeTypeFor(const std::string& url) {
   std::string ext = std::filesystem::path(url).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   if (ext == ".wav") return "audio/x-wav";
   if (ext == ".mp3") return "audio/mpeg";
   if (ext == ".mp4") return "video/mp4";
@@ -415,8 +405,7 @@ std::vector<LabelTier> ReadEaf(const std::string& path, std::vector<std::string>
   return reader.Read();
 }
 
-void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers,
-              const std::string& media_url) {
+void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers, const std::string& media_url) {
   struct Slot {
     int64_t ms;
     size_t order;
@@ -434,8 +423,7 @@ void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers,
     size_t previous_end_slot = 0;
     for (const Label& l : tiers[t].labels) {
       if (!std::isfinite(l.start_s) || !std::isfinite(l.end_s) || l.start_s < 0 || l.end_s < 0) {
-        throw InvalidInput("WriteEaf: tier \"" + tiers[t].name +
-                           "\" has a negative or non-finite time");
+        throw InvalidInput("WriteEaf: tier \"" + tiers[t].name + "\" has a negative or non-finite time");
       }
       if (l.start_s > l.end_s) {
         throw InvalidInput("WriteEaf: tier \"" + tiers[t].name + "\" has a label with start > end");
@@ -464,8 +452,7 @@ void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers,
   }
   std::vector<size_t> sorted(slots.size());
   for (size_t i = 0; i < sorted.size(); ++i) sorted[i] = i;
-  std::stable_sort(sorted.begin(), sorted.end(),
-                   [&](size_t a, size_t b) { return slots[a].ms < slots[b].ms; });
+  std::stable_sort(sorted.begin(), sorted.end(), [&](size_t a, size_t b) { return slots[a].ms < slots[b].ms; });
   for (size_t k = 0; k < sorted.size(); ++k) slots[sorted[k]].id = "ts" + std::to_string(k + 1);
 
   pugi::xml_document doc;
@@ -478,8 +465,7 @@ void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers,
   root.append_attribute("FORMAT") = "3.0";
   root.append_attribute("VERSION") = "3.0";
   root.append_attribute("xmlns:xsi") = "http://www.w3.org/2001/XMLSchema-instance";
-  root.append_attribute("xsi:noNamespaceSchemaLocation") =
-      "http://www.mpi.nl/tools/elan/EAFv3.0.xsd";
+  root.append_attribute("xsi:noNamespaceSchemaLocation") = "http://www.mpi.nl/tools/elan/EAFv3.0.xsd";
   pugi::xml_node header = root.append_child("HEADER");
   header.append_attribute("MEDIA_FILE") = "";
   header.append_attribute("TIME_UNITS") = "milliseconds";
@@ -507,8 +493,7 @@ void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers,
   std::set<std::string> used_names;
   size_t next_id = 1;
   for (size_t t = 0; t < tiers.size(); ++t) {
-    const std::string base =
-        tiers[t].name.empty() ? "tier " + std::to_string(t + 1) : tiers[t].name;
+    const std::string base = tiers[t].name.empty() ? "tier " + std::to_string(t + 1) : tiers[t].name;
     std::string name = base;
     for (int k = 2; !used_names.insert(name).second; ++k) {
       name = base + " (" + std::to_string(k) + ")";

@@ -46,10 +46,8 @@
 
 namespace csw {
 
-std::vector<LabelTier> ReadEaf(const std::string& path,
-                               std::vector<std::string>* warnings = nullptr);
+std::vector<LabelTier> ReadEaf(const std::string& path, std::vector<std::string>* warnings = nullptr);
 
-void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers,
-              const std::string& media_url = "");
+void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers, const std::string& media_url = "");
 
 }  // namespace csw

@@ -27,9 +27,8 @@ std::string ReadFileBytes(const std::string& path, int64_t max_bytes) {
   const std::streamoff size = in.tellg();
   if (size < 0) throw IoError(path, "cannot determine the file size");
   if (size > max_bytes) {
-    throw ParseError({path, max_bytes, std::nullopt}, "file is too large (" + std::to_string(size) +
-                                                          " bytes; limit " +
-                                                          std::to_string(max_bytes) + ")");
+    throw ParseError({path, max_bytes, std::nullopt},
+                     "file is too large (" + std::to_string(size) + " bytes; limit " + std::to_string(max_bytes) + ")");
   }
   in.seekg(0, std::ios::beg);
   std::string bytes(static_cast<size_t>(size), '\0');
@@ -75,8 +74,7 @@ void AppendUtf8(uint32_t cp, std::string* out) {
 
 }  // namespace
 
-std::string Utf16ToUtf8(std::string_view bytes, bool big_endian, const std::string& path,
-                        int64_t base_offset) {
+std::string Utf16ToUtf8(std::string_view bytes, bool big_endian, const std::string& path, int64_t base_offset) {
   if (bytes.size() % 2 != 0) {
     throw ParseError({path, base_offset + static_cast<int64_t>(bytes.size()) - 1, std::nullopt},
                      "UTF-16 text has an odd number of bytes (truncated?)");
@@ -103,8 +101,7 @@ std::string Utf16ToUtf8(std::string_view bytes, bool big_endian, const std::stri
       AppendUtf8(0x10000 + ((u - 0xD800) << 10) + (low - 0xDC00), &out);
       i += 2;
     } else if (u >= 0xDC00 && u <= 0xDFFF) {
-      throw ParseError({path, base_offset + static_cast<int64_t>(i), std::nullopt},
-                       "unpaired UTF-16 low surrogate");
+      throw ParseError({path, base_offset + static_cast<int64_t>(i), std::nullopt}, "unpaired UTF-16 low surrogate");
     } else {
       AppendUtf8(u, &out);
     }
@@ -141,8 +138,7 @@ bool IsValidUtf8(std::string_view s) {
       if ((cc & 0xC0) != 0x80) return false;
       cp = (cp << 6) | (cc & 0x3F);
     }
-    if ((len == 3 && cp < 0x800) || (len == 4 && cp < 0x10000) || cp > 0x10FFFF ||
-        (cp >= 0xD800 && cp <= 0xDFFF)) {
+    if ((len == 3 && cp < 0x800) || (len == 4 && cp < 0x10000) || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) {
       return false;
     }
     i += static_cast<size_t>(len);
@@ -200,8 +196,7 @@ std::optional<double> ParseFiniteDouble(std::string_view token) {
   if (token.empty()) return std::nullopt;
   // from_chars would accept "inf"/"nan"; only digits, '.', '-' may start a number here.
   const char c0 = token.front();
-  if (!(std::isdigit(static_cast<unsigned char>(c0)) || c0 == '.' || c0 == '-'))
-    return std::nullopt;
+  if (!(std::isdigit(static_cast<unsigned char>(c0)) || c0 == '.' || c0 == '-')) return std::nullopt;
   double value = 0.0;
   const char* end = token.data() + token.size();
   auto [ptr, ec] = std::from_chars(token.data(), end, value, std::chars_format::general);

@@ -27,13 +27,11 @@ const char* EncodingName(TextEncoding encoding);
 // as Latin-1 (old Praat and Windows tools wrote such files). The BOM is dropped.
 // Throws ParseError (file, byte offset) for an odd-length UTF-16 text or an
 // unpaired surrogate.
-std::string DecodeText(std::string_view bytes, const std::string& path,
-                       TextEncoding* encoding = nullptr);
+std::string DecodeText(std::string_view bytes, const std::string& path, TextEncoding* encoding = nullptr);
 
 // UTF-16 code units (raw bytes, no BOM) to UTF-8. base_offset is added to the
 // byte offsets reported in errors.
-std::string Utf16ToUtf8(std::string_view bytes, bool big_endian, const std::string& path,
-                        int64_t base_offset = 0);
+std::string Utf16ToUtf8(std::string_view bytes, bool big_endian, const std::string& path, int64_t base_offset = 0);
 
 // True when bytes are well-formed UTF-8 (no overlongs, no surrogates, <= U+10FFFF).
 bool IsValidUtf8(std::string_view bytes);

@@ -72,8 +72,7 @@ class Lexer {
 
  private:
   static bool IsSeparator(char c) {
-    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '=' ||
-           (static_cast<unsigned char>(c) < 0x20);
+    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '=' || (static_cast<unsigned char>(c) < 0x20);
   }
   // "nan", "inf", "infinity" (any case) are read as (bad) numbers, not skipped
   // as labels, so that they are reported where they stand.
@@ -99,8 +98,7 @@ class Lexer {
     ++pos_;  // opening quote
     while (true) {
       if (pos_ >= text_.size()) {
-        throw ParseError({path_, std::nullopt, start_line},
-                         "unterminated string (no closing double quote)");
+        throw ParseError({path_, std::nullopt, start_line}, "unterminated string (no closing double quote)");
       }
       const char ch = text_[pos_];
       if (ch == '"') {
@@ -136,25 +134,21 @@ class Lexer {
 
 class TextGridParser {
  public:
-  TextGridParser(std::string_view text, const std::string& path)
-      : lexer_(text, path), path_(path) {}
+  TextGridParser(std::string_view text, const std::string& path) : lexer_(text, path), path_(path) {}
 
   std::vector<LabelTier> Parse(double* xmin_out, double* xmax_out) {
     Token tok = lexer_.Next();
-    if (tok.kind != Token::Kind::kString ||
-        (tok.text != "ooTextFile" && tok.text != "ooTextFile short")) {
+    if (tok.kind != Token::Kind::kString || (tok.text != "ooTextFile" && tok.text != "ooTextFile short")) {
       throw Error(1, "not a Praat text file (expected File type = \"ooTextFile\")");
     }
     std::string object_class = ExpectString("the object class");
     if (object_class.rfind("TextGrid", 0) != 0) {
-      throw Error(last_line_,
-                  "object class is \"" + object_class.substr(0, 40) + "\", not \"TextGrid\"");
+      throw Error(last_line_, "object class is \"" + object_class.substr(0, 40) + "\", not \"TextGrid\"");
     }
     const double xmin = ExpectNumber("the TextGrid xmin");
     const double xmax = ExpectNumber("the TextGrid xmax");
     if (xmin > xmax) {
-      throw Error(last_line_,
-                  "TextGrid xmin " + FormatDouble(xmin) + " > xmax " + FormatDouble(xmax));
+      throw Error(last_line_, "TextGrid xmin " + FormatDouble(xmin) + " > xmax " + FormatDouble(xmax));
     }
     if (xmin_out) *xmin_out = xmin;
     if (xmax_out) *xmax_out = xmax;
@@ -176,20 +170,18 @@ class TextGridParser {
       } else if (tier_class == "TextTier") {
         tier.kind = LabelTier::Kind::kPoint;
       } else {
-        throw Error(class_line, "unknown tier class \"" + tier_class.substr(0, 40) +
-                                    "\" (expected IntervalTier or TextTier)");
+        throw Error(class_line,
+                    "unknown tier class \"" + tier_class.substr(0, 40) + "\" (expected IntervalTier or TextTier)");
       }
       tier.name = ExpectString("the tier name");
       tier.start_s = ExpectNumber("the tier xmin");
       tier.end_s = ExpectNumber("the tier xmax");
       if (tier.start_s > tier.end_s) {
-        throw Error(last_line_, "tier \"" + tier.name.substr(0, 40) + "\": xmin " +
-                                    FormatDouble(tier.start_s) + " > xmax " +
-                                    FormatDouble(tier.end_s));
+        throw Error(last_line_, "tier \"" + tier.name.substr(0, 40) + "\": xmin " + FormatDouble(tier.start_s) +
+                                    " > xmax " + FormatDouble(tier.end_s));
       }
       const bool intervals = tier.kind == LabelTier::Kind::kInterval;
-      const int64_t count =
-          ExpectCount(intervals ? "the interval count" : "the point count", intervals ? 6 : 4);
+      const int64_t count = ExpectCount(intervals ? "the interval count" : "the point count", intervals ? 6 : 4);
       tier.labels.reserve(static_cast<size_t>(count));
       for (int64_t i = 0; i < count; ++i) {
         Label label;
@@ -197,9 +189,8 @@ class TextGridParser {
           label.start_s = ExpectNumber("an interval xmin");
           label.end_s = ExpectNumber("an interval xmax");
           if (label.start_s > label.end_s) {
-            throw Error(last_line_, "tier \"" + tier.name.substr(0, 40) + "\", interval " +
-                                        std::to_string(i + 1) + ": xmin " +
-                                        FormatDouble(label.start_s) + " > xmax " +
+            throw Error(last_line_, "tier \"" + tier.name.substr(0, 40) + "\", interval " + std::to_string(i + 1) +
+                                        ": xmin " + FormatDouble(label.start_s) + " > xmax " +
                                         FormatDouble(label.end_s));
           }
           label.text = ExpectString("an interval text");
@@ -298,8 +289,8 @@ std::vector<LabelTier> ReadTextGrid(const std::string& path, double* xmin, doubl
   return parser.Parse(xmin, xmax);
 }
 
-void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers, double xmin,
-                   double xmax, bool short_format) {
+void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers, double xmin, double xmax,
+                   bool short_format) {
   CheckFinite(xmin, "xmin");
   CheckFinite(xmax, "xmax");
   if (xmin > xmax) throw InvalidInput("WriteTextGrid: xmin > xmax");
@@ -338,15 +329,13 @@ void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers,
     }
     CheckFinite(tier_start, "tier \"" + tier.name + "\" start");
     CheckFinite(tier_end, "tier \"" + tier.name + "\" end");
-    if (tier_start > tier_end)
-      throw InvalidInput("WriteTextGrid: tier \"" + tier.name + "\" start > end");
+    if (tier_start > tier_end) throw InvalidInput("WriteTextGrid: tier \"" + tier.name + "\" start > end");
     const bool intervals = tier.kind == LabelTier::Kind::kInterval;
     for (const Label& l : tier.labels) {
       CheckFinite(l.start_s, "a label time in tier \"" + tier.name + "\"");
       CheckFinite(l.end_s, "a label time in tier \"" + tier.name + "\"");
       if (intervals && l.start_s > l.end_s) {
-        throw InvalidInput("WriteTextGrid: tier \"" + tier.name +
-                           "\" has a label with start > end");
+        throw InvalidInput("WriteTextGrid: tier \"" + tier.name + "\" has a label with start > end");
       }
     }
     const std::vector<Label>& labels = tier.labels;
@@ -363,8 +352,7 @@ void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers,
     }
     for (size_t i = 0; i < labels.size(); ++i) {
       if (!short_format) {
-        out += std::string("        ") + (intervals ? "intervals" : "points") + " [" +
-               std::to_string(i + 1) + "]:\n";
+        out += std::string("        ") + (intervals ? "intervals" : "points") + " [" + std::to_string(i + 1) + "]:\n";
       }
       if (intervals) {
         num("xmin", labels[i].start_s, "            ");

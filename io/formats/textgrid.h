@@ -34,8 +34,7 @@
 namespace csw {
 
 // Reads all tiers of a TextGrid; the grid's xmin/xmax go to *xmin / *xmax.
-std::vector<LabelTier> ReadTextGrid(const std::string& path, double* xmin = nullptr,
-                                    double* xmax = nullptr);
+std::vector<LabelTier> ReadTextGrid(const std::string& path, double* xmin = nullptr, double* xmax = nullptr);
 
 // Writes a TextGrid in UTF-8 (no BOM), Praat's long text format by default or
 // the short format. Numbers are written in the shortest text that reads back to
@@ -46,8 +45,8 @@ std::vector<LabelTier> ReadTextGrid(const std::string& path, double* xmin = null
 // gets the grid's xmin/xmax.
 // Throws InvalidInput for non-finite times, xmin > xmax or a label with
 // start > end, IoError when the file cannot be written.
-void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers, double xmin,
-                   double xmax, bool short_format = false);
+void WriteTextGrid(const std::string& path, const std::vector<LabelTier>& tiers, double xmin, double xmax,
+                   bool short_format = false);
 
 // An interval tier made contiguous as Praat and praatio expect: an empty-text
 // interval is inserted in every gap before, between and after the labels within

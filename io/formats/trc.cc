@@ -78,8 +78,7 @@ void SplitFields(std::string_view line, std::vector<std::string_view>* fields) {
 bool StartsWithNoCase(std::string_view s, std::string_view prefix) {
   if (s.size() < prefix.size()) return false;
   for (size_t i = 0; i < prefix.size(); ++i) {
-    if (std::tolower(static_cast<unsigned char>(s[i])) !=
-        std::tolower(static_cast<unsigned char>(prefix[i]))) {
+    if (std::tolower(static_cast<unsigned char>(s[i])) != std::tolower(static_cast<unsigned char>(prefix[i]))) {
       return false;
     }
   }
@@ -158,9 +157,7 @@ Take ReadTrc(const std::string& path) {
     if (it == header.end()) return std::nullopt;
     return ParseFiniteDouble(it->second);
   };
-  auto plausible = [](std::optional<double> r) {
-    return r && *r >= kMinRateHz && *r <= kMaxRateHz;
-  };
+  auto plausible = [](std::optional<double> r) { return r && *r >= kMinRateHz && *r <= kMaxRateHz; };
   std::optional<double> rate = header_number("DataRate");
   if (!plausible(rate)) {
     std::optional<double> camera = header_number("CameraRate");
@@ -245,23 +242,19 @@ Take ReadTrc(const std::string& path) {
     int64_t frame = 0;
     if (auto f = ParseInt(frame_field)) {
       frame = *f;
-    } else if (auto d = ParseFiniteDouble(frame_field);
-               d && *d == std::floor(*d) && std::abs(*d) < 1e15) {
+    } else if (auto d = ParseFiniteDouble(frame_field); d && *d == std::floor(*d) && std::abs(*d) < 1e15) {
       frame = static_cast<int64_t>(*d);
     } else {
-      throw error(ln, "column 1: frame number expected, found '" +
-                          std::string(frame_field.substr(0, 40)) + "'");
+      throw error(ln, "column 1: frame number expected, found '" + std::string(frame_field.substr(0, 40)) + "'");
     }
     if (fields.size() > 1) {
       std::string_view time_field = Trim(fields[1]);
       if (!time_field.empty() && !ParseFiniteDouble(time_field)) {
-        throw error(ln, "column 2: time is not a finite number: '" +
-                            std::string(time_field.substr(0, 40)) + "'");
+        throw error(ln, "column 2: time is not a finite number: '" + std::string(time_field.substr(0, 40)) + "'");
       }
     }
     if (frame > kMaxFrameNumber || frame < -kMaxFrameNumber) {
-      throw error(ln, "column 1: frame number " + std::string(frame_field.substr(0, 40)) +
-                          " is out of range");
+      throw error(ln, "column 1: frame number " + std::string(frame_field.substr(0, 40)) + " is out of range");
     }
     if (first_data_line) {
       take.first_frame = frame;
@@ -297,8 +290,8 @@ Take ReadTrc(const std::string& path) {
         }
         const double mm = *v * mm_per_unit;
         if (std::abs(mm) > kMaxCoordinateMm) {
-          throw error(ln, "column " + std::to_string(col + 1) + ": coordinate " +
-                              std::string(cell.substr(0, 40)) + " is out of range");
+          throw error(ln, "column " + std::to_string(col + 1) + ": coordinate " + std::string(cell.substr(0, 40)) +
+                              " is out of range");
         }
         xyz[k] = mm;
         ++present;
@@ -317,9 +310,9 @@ Take ReadTrc(const std::string& path) {
   // Every stored sample needs at least a separator in the file; refuse tables
   // that would be far larger than anything the file can describe.
   if (frames > 0 && markers > 0 && frames * markers * 3 > 8 * file_size + 3 * 4096) {
-    throw error(widest_line > 0 ? widest_line : 4,
-                "table of " + std::to_string(frames) + " frames x " + std::to_string(markers) +
-                    " markers is too large for a " + std::to_string(file_size) + "-byte file");
+    throw error(widest_line > 0 ? widest_line : 4, "table of " + std::to_string(frames) + " frames x " +
+                                                       std::to_string(markers) + " markers is too large for a " +
+                                                       std::to_string(file_size) + "-byte file");
   }
   take.markers.Resize(frames, markers);
   for (int64_t f = 0; f < frames; ++f) {
@@ -357,14 +350,12 @@ Take ReadTrc(const std::string& path) {
   }
   if (declared_markers && *declared_markers != markers) {
     warnings.push_back("TRC header: NumMarkers=" + std::to_string(*declared_markers) + " but " +
-                       std::to_string(take.marker_names.size() - generated) +
-                       " names and data for " + std::to_string(markers) +
-                       " markers; the data are trusted");
+                       std::to_string(take.marker_names.size() - generated) + " names and data for " +
+                       std::to_string(markers) + " markers; the data are trusted");
   }
   if (declared_frames && *declared_frames != frames) {
-    warnings.push_back("TRC header: NumFrames=" + std::to_string(*declared_frames) + " but " +
-                       std::to_string(frames) + " data rows" +
-                       (frames < *declared_frames ? " (file truncated?)" : ""));
+    warnings.push_back("TRC header: NumFrames=" + std::to_string(*declared_frames) + " but " + std::to_string(frames) +
+                       " data rows" + (frames < *declared_frames ? " (file truncated?)" : ""));
   }
   if (frames == 0) warnings.push_back("TRC: no data rows");
   if (partial_samples > 0) {
@@ -373,8 +364,7 @@ Take ReadTrc(const std::string& path) {
   }
   if (frame_jumps > 0) {
     warnings.push_back("TRC: frame numbers are not consecutive " + std::to_string(frame_jumps) +
-                       " time(s) (first at line " + std::to_string(first_jump_line) +
-                       "); rows are kept in file order");
+                       " time(s) (first at line " + std::to_string(first_jump_line) + "); rows are kept in file order");
   }
 
   take.provenance.sources.push_back({path, Sha256OfFile(path), "trc"});
@@ -388,9 +378,8 @@ void WriteTrc(const std::string& path, const Take& take) {
     throw InvalidInput("WriteTrc: the take has no positive frame rate");
   }
   if (static_cast<int64_t>(take.marker_names.size()) != take.markers.markers()) {
-    throw InvalidInput("WriteTrc: " + std::to_string(take.marker_names.size()) +
-                       " marker names for " + std::to_string(take.markers.markers()) +
-                       " marker columns");
+    throw InvalidInput("WriteTrc: " + std::to_string(take.marker_names.size()) + " marker names for " +
+                       std::to_string(take.markers.markers()) + " marker columns");
   }
   const int64_t frames = take.markers.frames();
   const int64_t markers = take.markers.markers();
@@ -401,15 +390,13 @@ void WriteTrc(const std::string& path, const Take& take) {
   out +=
       "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame"
       "\tOrigNumFrames\n";
-  out += rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) +
-         "\tmm\t" + rate + "\t" + std::to_string(take.first_frame) + "\t" + std::to_string(frames) +
-         "\n";
+  out += rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) + "\tmm\t" + rate + "\t" +
+         std::to_string(take.first_frame) + "\t" + std::to_string(frames) + "\n";
   out += "Frame#\tTime";
   for (const std::string& name : take.marker_names) {
     std::string clean(Trim(name));
     std::replace_if(
-        clean.begin(), clean.end(), [](char c) { return c == '\t' || c == '\n' || c == '\r'; },
-        ' ');
+        clean.begin(), clean.end(), [](char c) { return c == '\t' || c == '\n' || c == '\r'; }, ' ');
     out += "\t" + clean + "\t\t";
   }
   out += "\n\t";
@@ -431,8 +418,8 @@ void WriteTrc(const std::string& path, const Take& take) {
         continue;
       }
       if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-        throw InvalidInput("WriteTrc: infinite coordinate at frame " + std::to_string(f) +
-                           ", marker " + take.marker_names[static_cast<size_t>(m)]);
+        throw InvalidInput("WriteTrc: infinite coordinate at frame " + std::to_string(f) + ", marker " +
+                           take.marker_names[static_cast<size_t>(m)]);
       }
       for (int k = 0; k < 3; ++k) {
         out += '\t';

@@ -22,8 +22,7 @@ constexpr sf_count_t kBlockFrames = 16384;
 // Closes the SNDFILE on scope exit.
 class SndFile {
  public:
-  SndFile(const std::string& path, int mode, SF_INFO* info)
-      : file_(sf_open(path.c_str(), mode, info)) {}
+  SndFile(const std::string& path, int mode, SF_INFO* info) : file_(sf_open(path.c_str(), mode, info)) {}
   ~SndFile() {
     if (file_) sf_close(file_);
   }
@@ -56,11 +55,9 @@ Audio ReadWav(const std::string& path) {
     throw ParseError({path, std::nullopt, std::nullopt},
                      std::string("not a readable audio file: ") + sf_strerror(nullptr));
   }
-  if (info.samplerate <= 0)
-    throw ParseError({path, std::nullopt, std::nullopt}, "sample rate is not positive");
+  if (info.samplerate <= 0) throw ParseError({path, std::nullopt, std::nullopt}, "sample rate is not positive");
   if (info.channels <= 0 || info.channels > kMaxChannels) {
-    throw ParseError({path, std::nullopt, std::nullopt},
-                     "unsupported channel count " + std::to_string(info.channels));
+    throw ParseError({path, std::nullopt, std::nullopt}, "unsupported channel count " + std::to_string(info.channels));
   }
   const int subtype = info.format & SF_FORMAT_SUBMASK;
   const bool is_float = subtype == SF_FORMAT_FLOAT || subtype == SF_FORMAT_DOUBLE;
@@ -77,15 +74,12 @@ Audio ReadWav(const std::string& path) {
         if (!std::isfinite(block[i])) {
           const size_t index = audio.samples.size() + i;
           throw ParseError({path, std::nullopt, std::nullopt},
-                           "sample " + std::to_string(index / static_cast<size_t>(info.channels)) +
-                               " (channel " +
-                               std::to_string(index % static_cast<size_t>(info.channels)) +
-                               ") is NaN or infinite");
+                           "sample " + std::to_string(index / static_cast<size_t>(info.channels)) + " (channel " +
+                               std::to_string(index % static_cast<size_t>(info.channels)) + ") is NaN or infinite");
         }
       }
     }
-    audio.samples.insert(audio.samples.end(), block.begin(),
-                         block.begin() + static_cast<ptrdiff_t>(n));
+    audio.samples.insert(audio.samples.end(), block.begin(), block.begin() + static_cast<ptrdiff_t>(n));
     if (got < kBlockFrames) break;
   }
   if (sf_error(file.get()) != SF_ERR_NO_ERROR) {
@@ -97,8 +91,7 @@ Audio ReadWav(const std::string& path) {
 
 void WriteWav(const std::string& path, const Audio& audio, int bits) {
   if (bits != 16 && bits != 32) {
-    throw InvalidInput("WriteWav: bits must be 16 (PCM) or 32 (float), not " +
-                       std::to_string(bits));
+    throw InvalidInput("WriteWav: bits must be 16 (PCM) or 32 (float), not " + std::to_string(bits));
   }
   if (!(audio.rate_hz > 0) || audio.rate_hz != std::floor(audio.rate_hz) || audio.rate_hz > 1e9) {
     throw InvalidInput("WriteWav: the sample rate must be a positive whole number of hertz");
@@ -118,8 +111,7 @@ void WriteWav(const std::string& path, const Audio& audio, int bits) {
   info.channels = audio.channels;
   info.format = SF_FORMAT_WAV | (bits == 16 ? SF_FORMAT_PCM_16 : SF_FORMAT_FLOAT);
   SndFile file(path, SFM_WRITE, &info);
-  if (!file.get())
-    throw IoError(path, std::string("cannot open for writing: ") + sf_strerror(nullptr));
+  if (!file.get()) throw IoError(path, std::string("cannot open for writing: ") + sf_strerror(nullptr));
   const sf_count_t frames = static_cast<sf_count_t>(audio.frames());
   sf_count_t written = 0;
   if (bits == 16) {
@@ -134,8 +126,7 @@ void WriteWav(const std::string& path, const Audio& audio, int bits) {
   } else {
     written = sf_writef_float(file.get(), audio.samples.data(), frames);
   }
-  if (written != frames)
-    throw IoError(path, std::string("write failed: ") + sf_strerror(file.get()));
+  if (written != frames) throw IoError(path, std::string("write failed: ") + sf_strerror(file.get()));
   if (file.Close() != 0) throw IoError(path, "close failed");
 }
 

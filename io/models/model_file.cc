@@ -194,8 +194,7 @@ void ValidateRotation(const Eigen::Matrix3d& r, const std::string& object, const
   }
   double err = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   c.Require(err <= kRotationTolerance && r.determinant() > 0, object,
-            "matrix" + which + " is not a rotation (|RᵀR − I| = " + Num(err) + ", det = " + Num(r.determinant()) +
-                ")");
+            "matrix" + which + " is not a rotation (|RᵀR − I| = " + Num(err) + ", det = " + Num(r.determinant()) + ")");
 }
 
 void ValidateGuidedPca(const GuidedPcaModel& s, int shape_markers, const std::string& object, const Checker& c) {
@@ -214,8 +213,7 @@ void ValidateGuidedPca(const GuidedPcaModel& s, int shape_markers, const std::st
   }
   RequireShape(s.loadings, coords, p, object + "/loadings", why + " × " + Str(p) + " parameters of the steps", c);
   RequireFinite(s.loadings, object + "/loadings", c);
-  RequireLength(static_cast<int64_t>(s.parameter_names.size()), p, object + "/parameter_names", "one per parameter",
-                c);
+  RequireLength(static_cast<int64_t>(s.parameter_names.size()), p, object + "/parameter_names", "one per parameter", c);
   RequireLength(static_cast<int64_t>(s.variance_explained.size()), p, object + "/variance_explained",
                 "one per parameter", c);
   RequireFinite(s.variance_explained, object + "/variance_explained", c);
@@ -237,8 +235,9 @@ void ValidateFace(const FaceModel& m, const std::string& object, const Checker& 
   }
   for (size_t i = 0; i < l.throat_weights.size(); ++i) {
     double w = l.throat_weights[i];
-    c.Require(std::isnan(w) || (w >= 0 && w <= 1), object + "/layout/throat_weights",
-              "value " + Num(w) + " at index " + Str(static_cast<int64_t>(i)) + " is neither NaN (fitted) nor in [0, 1]");
+    c.Require(
+        std::isnan(w) || (w >= 0 && w <= 1), object + "/layout/throat_weights",
+        "value " + Num(w) + " at index " + Str(static_cast<int64_t>(i)) + " is neither NaN (fitted) nor in [0, 1]");
   }
   ValidateRigid(m.head, object + "/head", c);
   c.Require(m.head.markers == l.head, object + "/head/markers", "differs from " + object + "/layout/head");
@@ -320,8 +319,8 @@ void ValidateHand(const HandModel& m, const std::string& object, const Checker& 
     RequireFinite(m.fill.covariance, fo + "/covariance", c);
     c.Require(m.fill.ridge_mm2 >= 0 && std::isfinite(m.fill.ridge_mm2), fo, "attribute ridge_mm2 must be >= 0");
     for (Eigen::Index i = 0; i < m.fill.covariance.rows(); ++i) {
-      c.Require(m.fill.covariance(i, i) >= 0, fo + "/covariance", "diagonal value " + Num(m.fill.covariance(i, i)) +
-                                                                      " at index " + Str(i) + " is negative");
+      c.Require(m.fill.covariance(i, i) >= 0, fo + "/covariance",
+                "diagonal value " + Num(m.fill.covariance(i, i)) + " at index " + Str(i) + " is negative");
     }
   }
   RequireLength(m.param_scale.size(), k, object + "/param_scale", "one per angle PCA parameter", c);
@@ -336,8 +335,8 @@ void ValidateHand(const HandModel& m, const std::string& object, const Checker& 
 // ---------------------------------------------------------------------------
 // Writing
 
-void WriteArray(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims, hid_t file_type,
-                hid_t mem_type, const void* data, const Where& where, const std::string& object) {
+void WriteArray(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims, hid_t file_type, hid_t mem_type,
+                const void* data, const Where& where, const std::string& object) {
   Handle space = h5::Own(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose, where,
                          "cannot create", object);
   Handle ds = h5::Own(H5Dcreate2(loc, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
@@ -350,14 +349,12 @@ void WriteArray(hid_t loc, const std::string& name, const std::vector<hsize_t>& 
 
 void WriteVector(hid_t loc, const std::string& name, const Eigen::VectorXd& v, const Where& where,
                  const std::string& object) {
-  WriteArray(loc, name, {static_cast<hsize_t>(v.size())}, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), where,
-             object);
+  WriteArray(loc, name, {static_cast<hsize_t>(v.size())}, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), where, object);
 }
 
 void WriteVector(hid_t loc, const std::string& name, const std::vector<double>& v, const Where& where,
                  const std::string& object) {
-  WriteArray(loc, name, {static_cast<hsize_t>(v.size())}, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), where,
-             object);
+  WriteArray(loc, name, {static_cast<hsize_t>(v.size())}, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), where, object);
 }
 
 // A matrix with the C++ shape: dataset (rows, cols), stored row by row.
@@ -553,7 +550,9 @@ Numbers ReadNumbers(hid_t loc, const std::string& name, size_t rank, const std::
   if (r < 0) c.Fail(object, "has no readable shape");
   if (static_cast<size_t>(r) != rank) {
     c.Fail(object, "has rank " + Str(r) + ", expected " + Str(static_cast<int64_t>(rank)) +
-                       (rank == 1 ? " (a vector)" : rank == 2 ? " (a matrix)" : " (a stack of matrices)"));
+                       (rank == 1   ? " (a vector)"
+                        : rank == 2 ? " (a matrix)"
+                                    : " (a stack of matrices)"));
   }
   Numbers out;
   out.dims.resize(rank);
@@ -831,8 +830,8 @@ ModelFile Parse(hid_t file, const Checker& c) {
   auto version = h5::ReadAttrInt(file, "format_version", where, "/");
   if (!version) c.Fail("", "csw model file without a format_version attribute");
   if (*version > kModelFormatVersion) {
-    c.Fail("", "model format_version " + Str(*version) + " is newer than this csw reads (" +
-                   Str(kModelFormatVersion) + "); update csw");
+    c.Fail("", "model format_version " + Str(*version) + " is newer than this csw reads (" + Str(kModelFormatVersion) +
+                   "); update csw");
   }
   if (*version < 1) c.Fail("", "invalid model format_version " + Str(*version));
 
@@ -883,9 +882,9 @@ void RefuseToClobber(const std::string& path) {
     format.reset();
   }
   if (!format || *format != kFormatName) {
-    std::string what = !format ? "an HDF5 file without a csw format attribute"
-                               : "an HDF5 file of format '" + *format + "'" +
-                                     (*format == kCorpusFormatName ? " (a csw corpus)" : "");
+    std::string what =
+        !format ? "an HDF5 file without a csw format attribute"
+                : "an HDF5 file of format '" + *format + "'" + (*format == kCorpusFormatName ? " (a csw corpus)" : "");
     throw IoError(path, refuse + "it is " + what + ", not a csw model file");
   }
 }

@@ -130,11 +130,10 @@ TEST(Cli, InspectMatchesReferenceForEveryOkFile) {
 TEST(Cli, MipsFilesGiveTheValuesOfTheirIntelTwins) {
   CSW_REQUIRE_SHARED_DATA("c3d/c3d.org/sample_01/Eb015si.c3d");
   testing::TempDir dir;
-  const std::vector<std::pair<std::string, std::string>> twins = {
-      {"sample_01/Eb015si.c3d", "sample_01/Eb015pi.c3d"},
-      {"sample_01/Eb015sr.c3d", "sample_01/Eb015pr.c3d"},
-      {"sample_02/sgi_int.c3d", "sample_02/pc_int.c3d"},
-      {"sample_02/sgi_real.c3d", "sample_02/pc_real.c3d"}};
+  const std::vector<std::pair<std::string, std::string>> twins = {{"sample_01/Eb015si.c3d", "sample_01/Eb015pi.c3d"},
+                                                                  {"sample_01/Eb015sr.c3d", "sample_01/Eb015pr.c3d"},
+                                                                  {"sample_02/sgi_int.c3d", "sample_02/pc_int.c3d"},
+                                                                  {"sample_02/sgi_real.c3d", "sample_02/pc_real.c3d"}};
   for (const auto& [mips, intel] : twins) {
     SCOPED_TRACE(mips);
     RunResult a = Csw("inspect --json " + Q(testing::SharedData("c3d/c3d.org/" + mips)), dir.path());
@@ -268,14 +267,15 @@ TEST(Cli, MarkerSetMismatchNamesTheMissingMarkers) {
   WriteC3d((dir / "a.c3d").string(), SmallTake("a", 20, 4));
   std::ofstream(dir / "set.json") << R"({"name": "s", "head_cluster": ["M0", "M1", "M2"], "face": ["LipU"]})";
   fs::path corpus = dir / "corpus.h5";
-  RunResult r = Csw("import " + Q(dir / "a.c3d") + " -o " + Q(corpus) + " --markerset " + Q(dir / "set.json"),
-                    dir.path());
+  RunResult r =
+      Csw("import " + Q(dir / "a.c3d") + " -o " + Q(corpus) + " --markerset " + Q(dir / "set.json"), dir.path());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("LipU"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(corpus));
   std::ofstream(dir / "ok.json") << R"({"name": "s", "head_cluster": ["M0", "M1", "m2"]})";
-  EXPECT_EQ(Csw("import " + Q(dir / "a.c3d") + " -o " + Q(corpus) + " --markerset " + Q(dir / "ok.json"),
-                dir.path()).code, 0);
+  EXPECT_EQ(
+      Csw("import " + Q(dir / "a.c3d") + " -o " + Q(corpus) + " --markerset " + Q(dir / "ok.json"), dir.path()).code,
+      0);
 }
 
 // A real SIGKILL in the middle of `csw import`: the previous corpus stays intact.

@@ -1,9 +1,8 @@
 // End-to-end tests of `csw fit` and `csw invert` (issue 4): the acceptance run
 // on a virtual-cuer corpus (simulated truth), the real Facial-Sing capture of
 // c3d.org (hidden samples), gap filling as a new take, and clear errors.
-#include <gtest/gtest.h>
-
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -59,7 +58,8 @@ TEST(CliModels, VirtualCuerAcceptance) {
     files += " '" + base + ".c3d' '" + base + ".wav' '" + base + ".TextGrid'";
   }
   const fs::path corpus = dir / "corpus.h5", models = dir / "models.h5";
-  ASSERT_EQ(Csw("import" + files + " --markerset " + Q(sim / "markerset.json") + " -o " + Q(corpus), dir.path()).code, 0);
+  ASSERT_EQ(Csw("import" + files + " --markerset " + Q(sim / "markerset.json") + " -o " + Q(corpus), dir.path()).code,
+            0);
   // Throat weights are fitted, not read from the simulator's marker set.
   {
     std::ifstream in(sim / "markerset.json");
@@ -71,8 +71,10 @@ TEST(CliModels, VirtualCuerAcceptance) {
   }
   std::ofstream(dir / "config.json") << R"({"format": "csw-model-config", "version": 1, "markerset": "set.json",
                                           "hand": {"angle_components": 20}})";
-  const std::string train = " --train sentence_001,sentence_002,sentence_003,sentence_004,sentence_005,sentence_006"
-                            " --config " + Q(dir / "config.json") + " -o " + Q(models);
+  const std::string train =
+      " --train sentence_001,sentence_002,sentence_003,sentence_004,sentence_005,sentence_006"
+      " --config " +
+      Q(dir / "config.json") + " -o " + Q(models);
   const json rigid = RunJson("fit rigid " + Q(corpus) + train, dir.path());
   ASSERT_EQ(rigid["rigid"].size(), 2u);
   const json face = RunJson("fit face " + Q(corpus) + train, dir.path());
@@ -180,8 +182,8 @@ TEST(CliModels, FacialSingHiddenSamplesAndRealGaps) {
   EXPECT_LE(fit["face"]["parameters"].size(), 10u);
   EXPECT_GT(fit["face"]["selected_frames"].get<int64_t>(), 100);
 
-  const json inv = RunJson("invert " + Q(corpus) + " --models " + Q(models) + " --takes 'Facial-Sing@50%:' --hide 0.1",
-                           dir.path());
+  const json inv =
+      RunJson("invert " + Q(corpus) + " --models " + Q(models) + " --takes 'Facial-Sing@50%:' --hide 0.1", dir.path());
   ASSERT_TRUE(inv.contains("face"));
   const json& take = inv["face"]["takes"][0];
   EXPECT_EQ(take["role"], "held_out");
@@ -223,7 +225,8 @@ TEST(CliModels, FacialSingHiddenSamplesAndRealGaps) {
   }
   EXPECT_GE(fill["filled"][0]["samples_filled"].get<int64_t>(), filled_samples);
   // A second fill makes another version and keeps the first.
-  const json again = RunJson("invert " + Q(corpus) + " --models " + Q(models) + " --takes Facial-Sing --fill", dir.path());
+  const json again =
+      RunJson("invert " + Q(corpus) + " --models " + Q(models) + " --takes Facial-Sing --fill", dir.path());
   EXPECT_EQ(again["filled"][0]["filled_take"], "Facial-Sing.filled-2");
   EXPECT_TRUE(Corpus::Open(corpus.string()).HasTake("Facial-Sing.filled"));
 }
@@ -261,8 +264,8 @@ TEST(CliModels, ClearErrors) {
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   // A config with an unknown key names the file and the key.
   std::ofstream(dir / "cfg.json") << R"({"face": {"componets": 3}})";
-  r = Csw("fit face " + Q(corpus) + " --markerset " + Q(sim / "markerset.json") + " --config " +
-              Q(dir / "cfg.json") + " -o " + Q(dir / "m.h5"),
+  r = Csw("fit face " + Q(corpus) + " --markerset " + Q(sim / "markerset.json") + " --config " + Q(dir / "cfg.json") +
+              " -o " + Q(dir / "m.h5"),
           dir.path());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("cfg.json"), std::string::npos) << r.err;

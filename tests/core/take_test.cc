@@ -1,3 +1,5 @@
+#include "core/take.h"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -5,7 +7,6 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "core/sha256.h"
-#include "core/take.h"
 #include "tests/testing/testing.h"
 
 namespace csw {

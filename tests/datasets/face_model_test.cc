@@ -1,8 +1,9 @@
+#include "datasets/face_model.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "datasets/face_model.h"
 #include "synth/phonetics.h"
 
 namespace csw {
@@ -34,7 +35,8 @@ TEST(VirtualFace, MarkersAreLinearInTheArticulatoryParameters) {
   // Jaw opening: the chin goes down (and a little back), about 1 mm per unit.
   ArticulatoryVector jaw = ArticulatoryVector::Zero();
   jaw[kJawOpening] = 10.0;
-  Eigen::Vector3d d = face.MarkersInHead(jaw).col(face.MarkerIndex("CHIN")) - face.neutral().col(face.MarkerIndex("CHIN"));
+  Eigen::Vector3d d =
+      face.MarkersInHead(jaw).col(face.MarkerIndex("CHIN")) - face.neutral().col(face.MarkerIndex("CHIN"));
   EXPECT_LT(d.z(), -8.0);
   EXPECT_LT(d.y(), 0.0);
   EXPECT_NEAR(d.norm(), 10.0 * std::hypot(51.0, 94.0) / 100.0, 1e-9);  // chin − TMJ = (0, 94, −51)
@@ -71,7 +73,8 @@ TEST(VirtualFace, CoarticulationReachesVowelTargetsAndBilabialClosure) {
   for (int k = 0; k < kNumArticulatory; ++k) EXPECT_NEAR(p[0][k], a.target[k], 1e-9) << k;
   // /b/ centre: carrier is /a/ on both sides.
   EXPECT_NEAR(p[1][kLipClosure], b.target[kLipClosure], 1e-9);
-  const double jaw = a.target[kJawOpening] + b.resistance[kJawOpening] * (b.target[kJawOpening] - a.target[kJawOpening]);
+  const double jaw =
+      a.target[kJawOpening] + b.resistance[kJawOpening] * (b.target[kJawOpening] - a.target[kJawOpening]);
   EXPECT_NEAR(p[1][kJawOpening], jaw, 1e-9);
   EXPECT_NEAR(p[2][kJawOpening], a.target[kJawOpening], 1e-9);
 }

@@ -1,10 +1,11 @@
+#include "datasets/hand_model.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
 #include "core/error.h"
-#include "datasets/hand_model.h"
 
 namespace csw {
 namespace {

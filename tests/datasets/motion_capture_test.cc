@@ -49,7 +49,7 @@ TEST(Capture, SegmentEllipsoidIntersection) {
   const Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
   const Eigen::Vector3d radii(10, 20, 30), c(0, 0, 0);
   EXPECT_TRUE(SegmentHitsEllipsoid({-50, 0, 0}, {50, 0, 0}, c, axes, radii));
-  EXPECT_FALSE(SegmentHitsEllipsoid({-50, 0, 0}, {-20, 0, 0}, c, axes, radii));  // stops short
+  EXPECT_FALSE(SegmentHitsEllipsoid({-50, 0, 0}, {-20, 0, 0}, c, axes, radii));   // stops short
   EXPECT_FALSE(SegmentHitsEllipsoid({11, -50, 0}, {11, 50, 0}, c, axes, radii));  // passes beside x = 10
   EXPECT_TRUE(SegmentHitsEllipsoid({9, -50, 0}, {9, 50, 0}, c, axes, radii));
   EXPECT_TRUE(SegmentHitsEllipsoid({0, 0, 29}, {0, 0, 100}, c, axes, radii));  // starts inside

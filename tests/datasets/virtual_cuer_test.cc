@@ -1,3 +1,5 @@
+#include "datasets/virtual_cuer.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,7 +12,6 @@
 
 #include "core/error.h"
 #include "core/markerset.h"
-#include "datasets/virtual_cuer.h"
 #include "io/c3d/c3d.h"
 #include "io/formats/textgrid.h"
 #include "io/formats/wav.h"
@@ -214,7 +215,8 @@ TEST(VirtualCuer, KeysReachTheirPostureAndPlacementAtTheirTargetTimes) {
     std::vector<double> angle_err, tip_err;
     int checked = 0, keys_total = 0;
     for (int s = 0; s < 6; ++s) {
-      SimulationResult r = cuer.SimulateUtterance("reach_" + std::to_string(s), PhonesOnly(Sentences().at(static_cast<size_t>(s))));
+      SimulationResult r =
+          cuer.SimulateUtterance("reach_" + std::to_string(s), PhonesOnly(Sentences().at(static_cast<size_t>(s))));
       for (size_t k = 1; k + 1 < r.keys.size(); ++k) {
         ++keys_total;
         const GestureTruth& g = r.keys[k];
@@ -232,7 +234,9 @@ TEST(VirtualCuer, KeysReachTheirPostureAndPlacementAtTheirTargetTimes) {
         // The key's own target is the configured one up to the per-key variability (2.5 sd).
         EXPECT_LE((g.posture - posture.angles).cwiseAbs().maxCoeff(), 2.5 * o.posture_sd_deg * kDeg + 1e-9);
         EXPECT_LE((g.placement_point - PlacementTarget(cuer.placements().At(g.key.placement), cuer.face()))
-                      .cwiseAbs().maxCoeff(), 2.5 * o.placement_sd_mm + 1e-9);
+                      .cwiseAbs()
+                      .maxCoeff(),
+                  2.5 * o.placement_sd_mm + 1e-9);
         ++checked;
       }
     }
@@ -307,7 +311,7 @@ TEST(VirtualCuer, FingertipSpeedBetweenKeysIsSinglePeaked) {
       if (travel < 5.0) continue;
       ++profiles;
       EXPECT_EQ(CountPeaks(speed), 1) << "key " << k << " (" << r.keys[k - 1].key.shape << " -> " << r.keys[k].key.shape
-                                       << ") marker " << r.take.marker_names[static_cast<size_t>(col)];
+                                      << ") marker " << r.take.marker_names[static_cast<size_t>(col)];
     }
   }
   EXPECT_GT(profiles, 100);
@@ -374,7 +378,8 @@ TEST(VirtualCuer, HandMarkersAreReachableByARegressionOnCosAndSinOfTheAngles) {
   {
     VirtualCuer cuer{SimulateOptions()};
     for (int s = 1; s <= 4; ++s) {
-      SimulationResult t = cuer.SimulateUtterance("train_" + std::to_string(s), PhonesOnly(Sentences().at(static_cast<size_t>(s))));
+      SimulationResult t =
+          cuer.SimulateUtterance("train_" + std::to_string(s), PhonesOnly(Sentences().at(static_cast<size_t>(s))));
       Eigen::MatrixXd xs, ys;
       design(t, &xs, &ys);
       Eigen::MatrixXd x2(x.rows() + xs.rows(), x.cols()), y2(y.rows() + ys.rows(), y.cols());
@@ -510,7 +515,8 @@ TEST(VirtualCuer, TextGridsOpenInPraat) {
   for (const char* take : {"sentence_test", "shapes_test"}) {
     const fs::path tg = dir / (std::string(take) + ".TextGrid");
     const fs::path out = dir / (std::string(take) + ".txt");
-    const std::string cmd = "praat --run \"" + script.string() + "\" \"" + tg.string() + "\" > \"" + out.string() + "\" 2>&1";
+    const std::string cmd =
+        "praat --run \"" + script.string() + "\" \"" + tg.string() + "\" > \"" + out.string() + "\" 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadBytes(out);
     std::string expected;
     for (const LabelTier& t : ReadTextGrid(tg.string()))

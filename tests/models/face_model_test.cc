@@ -1,13 +1,13 @@
 #include "models/face_model.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "core/error.h"
 
@@ -42,8 +42,10 @@ Truth MakeTruth(int nh, int nf, int nt, int np, const std::vector<double>& throa
   t.head_ref = t.head_ref.colwise() - t.head_ref.rowwise().mean();
   const int ns = nf + nt;
   t.mean.resize(3 * ns);
-  for (int j = 0; j < nf; ++j) t.mean.segment<3>(3 * j) = Eigen::Vector3d(40 * u(rng), 80 + 10 * u(rng), -40 + 30 * u(rng));
-  for (int j = nf; j < ns; ++j) t.mean.segment<3>(3 * j) = Eigen::Vector3d(30 * u(rng), 30 + 10 * u(rng), -140 + 20 * u(rng));
+  for (int j = 0; j < nf; ++j)
+    t.mean.segment<3>(3 * j) = Eigen::Vector3d(40 * u(rng), 80 + 10 * u(rng), -40 + 30 * u(rng));
+  for (int j = nf; j < ns; ++j)
+    t.mean.segment<3>(3 * j) = Eigen::Vector3d(30 * u(rng), 30 + 10 * u(rng), -140 + 20 * u(rng));
   t.loadings.resize(3 * ns, np);
   for (Eigen::Index r = 0; r < t.loadings.rows(); ++r)
     for (int k = 0; k < np; ++k) t.loadings(r, k) = 1.5 * n(rng);
@@ -160,8 +162,8 @@ DataSet MakeDataSet(int nh, int nf, const std::vector<double>& throat_weights, i
   }
   d.truth.rest = RestPose(d.train_poses);
   for (int i = 0; i < 2; ++i) {
-    d.train.push_back(MakeTake(d.truth, d.train_poses[static_cast<size_t>(i)],
-                               d.train_params[static_cast<size_t>(i)], noise_mm, seed + 30 + i));
+    d.train.push_back(MakeTake(d.truth, d.train_poses[static_cast<size_t>(i)], d.train_params[static_cast<size_t>(i)],
+                               noise_mm, seed + 30 + i));
   }
   d.test_poses = MakePoses(test_frames, false, seed + 40);
   d.test_params = MakeParams(test_frames, np, seed + 41);
@@ -207,7 +209,8 @@ TEST(FaceModel, FitRecoversThroatWeightsWithNoiseAndFixedWeights) {
   const FaceModel m = FitFaceModel(layout, d.train, opt);
   EXPECT_EQ(m.head_weights(31), 0.45);
   for (int j = 0; j < 6; ++j) {
-    std::printf("throat %d: weight %.4f (truth %.2f)\n", j, m.head_weights(30 + j), kThroatWeights[static_cast<size_t>(j)]);
+    std::printf("throat %d: weight %.4f (truth %.2f)\n", j, m.head_weights(30 + j),
+                kThroatWeights[static_cast<size_t>(j)]);
     EXPECT_NEAR(m.head_weights(30 + j), kThroatWeights[static_cast<size_t>(j)], 0.005) << "throat " << j;
   }
   // Rounds = 0: fitted weights stay at the start value.
@@ -292,8 +295,8 @@ TEST(FaceModel, HiddenMarkersAreReconstructed) {
     for (int64_t c = 8; c < take.markers(); ++c) {
       const float* a = r.reconstructed.at(f, c);
       const float* b = clean.at(f, c);
-      const double e = std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                                 (a[2] - b[2]) * (a[2] - b[2]));
+      const double e =
+          std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
       if (hidden[static_cast<size_t>(f * take.markers() + c)]) {
         sum_hidden += e;
         ++n_hidden;
@@ -360,8 +363,8 @@ TEST(FaceModel, UnsolvableFramesAreNaN) {
 TEST(FaceModel, ShapeMarkersInLabMatchesTheModelEquations) {
   const DataSet d = MakeDataSet(6, 10, {0.5, 0.7}, 3, 20, 5, 0.0, 18);
   const FaceModel m = KnownModel(d.truth);
-  const Eigen::Matrix3Xd lab = m.MarkersInLab(RigidTransform::FromParameters(d.test_poses.row(2).transpose()),
-                                              d.test_params.row(2).transpose());
+  const Eigen::Matrix3Xd lab =
+      m.MarkersInLab(RigidTransform::FromParameters(d.test_poses.row(2).transpose()), d.test_params.row(2).transpose());
   const Eigen::Matrix3Xd want = LabMarkers(d.truth, d.test_poses.row(2).transpose(), d.test_params.row(2).transpose());
   EXPECT_LT((lab - want).cwiseAbs().maxCoeff(), 1e-9);
 }

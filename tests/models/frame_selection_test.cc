@@ -1,11 +1,11 @@
 #include "models/frame_selection.h"
 
+#include <gtest/gtest.h>
+
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "core/error.h"
 
@@ -117,7 +117,7 @@ TEST(FrameSelection, RejectsBadInput) {
   // Hostile values: huge and infinite coordinates, a tiny threshold.
   MarkerArray h(4, 1);
   Set(&h, 0, 0, 3e38, -3e38, 0);
-  Set(&h, 1, 0, 3e38, -3e38, 0);  // same as frame 0: dropped
+  Set(&h, 1, 0, 3e38, -3e38, 0);                                 // same as frame 0: dropped
   Set(&h, 2, 0, std::numeric_limits<double>::infinity(), 0, 0);  // not finite: excluded
   Set(&h, 3, 0, 0, 0, 1e-300);
   const FrameSelection hs = SelectTrainingFrames(h, {0}, 1e-300);

@@ -1,18 +1,18 @@
 // Gaussian gap filler (models/gaussian_fill.h): EM estimates of a known
 // normal from incomplete samples, the conditional mean against its closed
 // form, the pattern cache, and clear errors.
+#include "models/gaussian_fill.h"
+
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/LU>
 #include <cmath>
 #include <random>
 
-#include <Eigen/Cholesky>
-#include <Eigen/LU>
-#include <Eigen/Core>
-
 #include "core/error.h"
 #include "core/progress.h"
-#include "models/gaussian_fill.h"
 
 namespace csw {
 namespace {
@@ -134,7 +134,7 @@ TEST(GaussianFill, BeatsCompleteCaseTrainingWhenHidingDependsOnThePosture) {
   }
   complete_mean /= complete;
   const double sd = std::sqrt(truth.cov(6, 6));
-  EXPECT_GT(truth.mean(6) - complete_mean, 0.5 * sd);        // complete frames: biased low
+  EXPECT_GT(truth.mean(6) - complete_mean, 0.5 * sd);         // complete frames: biased low
   EXPECT_LT(std::abs(em.mean(6) - truth.mean(6)), 0.1 * sd);  // EM: unbiased
   // Filling the hidden samples: mean error well below the complete-case mean's.
   GaussianFiller filler(em);

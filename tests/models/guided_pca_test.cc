@@ -1,13 +1,13 @@
 #include "models/guided_pca.h"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <vector>
-
-#include <Eigen/QR>
-#include <Eigen/SVD>
-#include <gtest/gtest.h>
 
 #include "core/error.h"
 
@@ -16,10 +16,10 @@ namespace {
 
 // Largest principal angle (radians) between the column spans of a and b.
 double SubspaceAngle(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-  const Eigen::MatrixXd qa = Eigen::HouseholderQR<Eigen::MatrixXd>(a).householderQ() *
-                             Eigen::MatrixXd::Identity(a.rows(), a.cols());
-  const Eigen::MatrixXd qb = Eigen::HouseholderQR<Eigen::MatrixXd>(b).householderQ() *
-                             Eigen::MatrixXd::Identity(b.rows(), b.cols());
+  const Eigen::MatrixXd qa =
+      Eigen::HouseholderQR<Eigen::MatrixXd>(a).householderQ() * Eigen::MatrixXd::Identity(a.rows(), a.cols());
+  const Eigen::MatrixXd qb =
+      Eigen::HouseholderQR<Eigen::MatrixXd>(b).householderQ() * Eigen::MatrixXd::Identity(b.rows(), b.cols());
   // sin of the largest angle = norm of the part of qb outside span(qa).
   const Eigen::MatrixXd outside = qb - qa * (qa.transpose() * qb);
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(outside);
@@ -33,8 +33,8 @@ Eigen::MatrixXd OrthogonalScores(int frames, const std::vector<double>& scales, 
   s.col(0).setOnes();
   for (Eigen::Index c = 1; c < s.cols(); ++c)
     for (int r = 0; r < frames; ++r) s(r, c) = n(rng);
-  Eigen::MatrixXd q = Eigen::HouseholderQR<Eigen::MatrixXd>(s).householderQ() *
-                      Eigen::MatrixXd::Identity(frames, s.cols());
+  Eigen::MatrixXd q =
+      Eigen::HouseholderQR<Eigen::MatrixXd>(s).householderQ() * Eigen::MatrixXd::Identity(frames, s.cols());
   Eigen::MatrixXd out = q.rightCols(static_cast<Eigen::Index>(scales.size()));
   for (size_t c = 0; c < scales.size(); ++c) out.col(static_cast<Eigen::Index>(c)) *= scales[c];
   return out;
@@ -64,9 +64,7 @@ Synthetic MakeSynthetic(int frames, unsigned seed) {
   return s;
 }
 
-std::vector<GuidedPcaStep> Steps() {
-  return {{"jaw", {0, 1, 2}, 1}, {"lip", {3, 4, 5, 6}, 1}, {"throat", {7}, 1}};
-}
+std::vector<GuidedPcaStep> Steps() { return {{"jaw", {0, 1, 2}, 1}, {"lip", {3, 4, 5, 6}, 1}, {"throat", {7}, 1}}; }
 
 TEST(GuidedPca, RecoversKnownComponentsAndVarianceFractions) {
   const Synthetic s = MakeSynthetic(200, 1);
@@ -84,8 +82,7 @@ TEST(GuidedPca, RecoversKnownComponentsAndVarianceFractions) {
   const double total = centred.squaredNorm();
   double sum = 0;
   for (int k = 0; k < 3; ++k) {
-    const double expected =
-        s.scores.col(k).squaredNorm() * s.components.col(k).squaredNorm() / total;
+    const double expected = s.scores.col(k).squaredNorm() * s.components.col(k).squaredNorm() / total;
     EXPECT_NEAR(m.variance_explained[static_cast<size_t>(k)], expected, 1e-10);
     sum += m.variance_explained[static_cast<size_t>(k)];
   }
@@ -153,8 +150,7 @@ TEST(GuidedPca, PredictEstimateRoundTripWithHiddenCoordinates) {
 }
 
 TEST(GuidedPca, MarkerMaskExpandsToCoordinates) {
-  EXPECT_EQ(CoordinateMaskFromMarkers({true, false}),
-            (std::vector<bool>{true, true, true, false, false, false}));
+  EXPECT_EQ(CoordinateMaskFromMarkers({true, false}), (std::vector<bool>{true, true, true, false, false, false}));
 }
 
 TEST(GuidedPca, RejectsBadInput) {

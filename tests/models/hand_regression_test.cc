@@ -1,12 +1,12 @@
 #include "models/hand_regression.h"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/QR>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
 #include <random>
-
-#include <Eigen/QR>
-#include <gtest/gtest.h>
 
 #include "core/error.h"
 #include "models/joint_angles.h"
@@ -78,8 +78,7 @@ TEST(HandRegression, NoisyDataStaysWithinNoise) {
   const Eigen::MatrixXd test_angles = RandomAngles(200, n, rng);
   const Eigen::MatrixXd diff = reg.PredictFrames(test_angles) - Features(test_angles) * truth;
   const double rms = std::sqrt(diff.squaredNorm() / static_cast<double>(diff.size()));
-  std::printf("noisy map (sigma %.2f): residual rms %.4f, prediction rms error %.4f\n", sigma,
-              reg.rms_residual, rms);
+  std::printf("noisy map (sigma %.2f): residual rms %.4f, prediction rms error %.4f\n", sigma, reg.rms_residual, rms);
   EXPECT_LT(rms, 2 * sigma * std::sqrt(9.0 / frames));
   // A small ridge changes the answer by little.
   HandRegressionOptions ridge;
@@ -103,8 +102,7 @@ TEST(HandRegression, ConstantAngleIsDroppedAndStillPredicts) {
     EXPECT_EQ(reg.coefficients.row(3).norm(), 0.0);
     Eigen::MatrixXd test = RandomAngles(50, 4, rng);
     test.col(2).setConstant(0.7);
-    EXPECT_LT((reg.PredictFrames(test) - Features(test) * truth).cwiseAbs().maxCoeff(), 1e-8)
-        << "ridge " << ridge;
+    EXPECT_LT((reg.PredictFrames(test) - Features(test) * truth).cwiseAbs().maxCoeff(), 1e-8) << "ridge " << ridge;
   }
 }
 

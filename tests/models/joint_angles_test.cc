@@ -1,12 +1,12 @@
 #include "models/joint_angles.h"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
 #include <random>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <gtest/gtest.h>
 
 namespace csw {
 namespace {
@@ -59,11 +59,11 @@ TEST(JointAngles, WrapAngleMapsToHalfOpenInterval) {
 TEST(JointAngles, RecoversKnownAnglesFromMarkerFrames) {
   std::mt19937 rng(7);
   const double near_pi = kPi - 1e-7;
-  const std::vector<JointAngles> cases = {
-      {0.3, 0.2, -0.1, false},       {-1.2, -0.7, 0.4, false},     {2.5, 1.4, -2.9, false},
-      {near_pi, 0.1, 0.2, false},    {-near_pi, -0.1, 0.3, false}, {0.4, -0.2, near_pi, false},
-      {-0.4, 0.3, -near_pi, false},  {kPi, 0.0, kPi, false},       {-3.0, -1.5, 3.0, false},
-      {0.0, 0.0, 0.0, false}};
+  const std::vector<JointAngles> cases = {{0.3, 0.2, -0.1, false},      {-1.2, -0.7, 0.4, false},
+                                          {2.5, 1.4, -2.9, false},      {near_pi, 0.1, 0.2, false},
+                                          {-near_pi, -0.1, 0.3, false}, {0.4, -0.2, near_pi, false},
+                                          {-0.4, 0.3, -near_pi, false}, {kPi, 0.0, kPi, false},
+                                          {-3.0, -1.5, 3.0, false},     {0.0, 0.0, 0.0, false}};
   for (const JointAngles& truth : cases) {
     SegmentFrame parent;
     parent.rotation = RandomRotation(rng);

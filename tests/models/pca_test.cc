@@ -1,12 +1,11 @@
 #include "models/pca.h"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
 #include <random>
-
-#include <Eigen/Geometry>
-
-#include <gtest/gtest.h>
 
 #include "core/error.h"
 

@@ -1,9 +1,9 @@
 #include "models/rigid_model.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "core/error.h"
 #include "models/inversion.h"
@@ -142,7 +142,7 @@ TEST(Inversion, GapEdgeResidualsAreInterpolatedAcrossGaps) {
     in[1] = in[2] = 0.0f;
   }
   for (int f = 3; f < 6; ++f) input.SetMissing(f, 0);  // gap [3, 6): edges at 2 (misfit 1) and 6 (misfit 3)
-  input.SetMissing(9, 0);                             // trailing gap: one edge (misfit 3 at frame 8)
+  input.SetMissing(9, 0);                              // trailing gap: one edge (misfit 3 at frame 8)
   EXPECT_EQ(CorrectGapsWithEdgeResiduals(input, &r, 4), 4);
   EXPECT_FLOAT_EQ(r.reconstructed.at(3, 0)[0], 1.5f);
   EXPECT_FLOAT_EQ(r.reconstructed.at(4, 0)[0], 2.0f);

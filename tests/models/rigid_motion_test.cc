@@ -1,11 +1,11 @@
 #include "models/rigid_motion.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "core/error.h"
 #include "models/pca.h"
@@ -20,7 +20,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 Eigen::Matrix3Xd HeadShape() {
   Eigen::Matrix3Xd s(3, 6);
   s << 60, -60, 0, 0, 45, -45,  //
-      0, 0, 80, -20, 50, 50,     //
+      0, 0, 80, -20, 50, 50,    //
       10, 10, 30, 90, -40, -40;
   return s.colwise() - s.rowwise().mean();
 }

@@ -47,9 +47,8 @@ std::string CodesOf(const std::string& spec) { return Codes(CueKeys(MakePhones(s
 
 TEST(Cueing, ShapeTableMatchesCuedSpeechDoc) {
   const std::vector<std::pair<std::string, int>> shapes = {
-      {"p", 1}, {"d", 1}, {"ʒ", 1}, {"k", 2}, {"v", 2}, {"z", 2}, {"s", 3}, {"ʁ", 3},
-      {"b", 4}, {"n", 4}, {"ɥ", 4}, {"t", 5}, {"m", 5}, {"f", 5}, {"l", 6}, {"ʃ", 6},
-      {"ɲ", 6}, {"w", 6}, {"ɡ", 7}, {"j", 8}, {"ŋ", 8}};
+      {"p", 1}, {"d", 1}, {"ʒ", 1}, {"k", 2}, {"v", 2}, {"z", 2}, {"s", 3}, {"ʁ", 3}, {"b", 4}, {"n", 4}, {"ɥ", 4},
+      {"t", 5}, {"m", 5}, {"f", 5}, {"l", 6}, {"ʃ", 6}, {"ɲ", 6}, {"w", 6}, {"ɡ", 7}, {"j", 8}, {"ŋ", 8}};
   for (const auto& [ipa, shape] : shapes) {
     EXPECT_EQ(ConsonantShape(ipa), shape) << ipa;
     EXPECT_TRUE(IsConsonant(ipa)) << ipa;
@@ -61,9 +60,9 @@ TEST(Cueing, ShapeTableMatchesCuedSpeechDoc) {
 }
 
 TEST(Cueing, PlacementTableMatchesCuedSpeechDoc) {
-  const std::vector<std::pair<std::string, int>> placements = {
-      {"a", 1}, {"o", 1}, {"œ", 1}, {"ə", 1}, {"ɛ̃", 2}, {"ø", 2}, {"i", 3}, {"ɔ̃", 3},
-      {"ɑ̃", 3}, {"ɛ", 4}, {"u", 4}, {"ɔ", 4}, {"y", 5}, {"e", 5}, {"œ̃", 5}};
+  const std::vector<std::pair<std::string, int>> placements = {{"a", 1}, {"o", 1}, {"œ", 1}, {"ə", 1}, {"ɛ̃", 2},
+                                                               {"ø", 2}, {"i", 3}, {"ɔ̃", 3}, {"ɑ̃", 3}, {"ɛ", 4},
+                                                               {"u", 4}, {"ɔ", 4}, {"y", 5}, {"e", 5}, {"œ̃", 5}};
   for (const auto& [ipa, placement] : placements) {
     EXPECT_EQ(VowelPlacement(ipa), placement) << ipa;
     EXPECT_TRUE(IsVowel(ipa)) << ipa;
@@ -107,9 +106,9 @@ TEST(Cueing, Schwa) {
 }
 
 TEST(Cueing, SemiVowelsAreConsonants) {
-  EXPECT_EQ(CodesOf("w i"), "00 36 00");      // oui: w shape 6, i mouth
+  EXPECT_EQ(CodesOf("w i"), "00 36 00");       // oui: w shape 6, i mouth
   EXPECT_EQ(CodesOf("ɥ i t"), "00 34 15 00");  // huit: ɥ shape 4; t alone at the side
-  EXPECT_EQ(CodesOf("j ø"), "00 28 00");      // yeux: j shape 8, ø cheek bone
+  EXPECT_EQ(CodesOf("j ø"), "00 28 00");       // yeux: j shape 8, ø cheek bone
   // cuisinier k ɥ i z i n j e: k before a consonant alone (12), ɥi 34, zi 32,
   // n before j alone (14), je 58.
   EXPECT_EQ(CodesOf("k ɥ i z i n j e"), "00 12 34 32 14 58 00");
@@ -133,12 +132,12 @@ TEST(Cueing, ConsonantCluster) {
 }
 
 TEST(Cueing, VowelSequenceAndNasals) {
-  EXPECT_EQ(CodesOf("k a o"), "00 12 15 00");              // chaos: o alone
-  EXPECT_EQ(CodesOf("œ̃"), "00 55 00");                    // un
-  EXPECT_EQ(CodesOf("v ɛ̃"), "00 22 00");                  // vin
-  EXPECT_EQ(CodesOf("k ɑ̃ p i ŋ"), "00 32 31 18 00");      // camping
-  EXPECT_EQ(CodesOf("a ɲ o"), "00 15 16 00");              // agneau
-  EXPECT_EQ(CodesOf("ɡ a t o"), "00 17 15 00");            // gâteau
+  EXPECT_EQ(CodesOf("k a o"), "00 12 15 00");         // chaos: o alone
+  EXPECT_EQ(CodesOf("œ̃"), "00 55 00");                // un
+  EXPECT_EQ(CodesOf("v ɛ̃"), "00 22 00");              // vin
+  EXPECT_EQ(CodesOf("k ɑ̃ p i ŋ"), "00 32 31 18 00");  // camping
+  EXPECT_EQ(CodesOf("a ɲ o"), "00 15 16 00");         // agneau
+  EXPECT_EQ(CodesOf("ɡ a t o"), "00 17 15 00");       // gâteau
 }
 
 TEST(Cueing, PausesBreakSyllables) {

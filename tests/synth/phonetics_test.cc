@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 #include <random>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -72,9 +72,9 @@ TEST(Phonetics, EspeakTable) {
   EXPECT_TRUE(IsEspeakPause("_|"));
   EXPECT_FALSE(IsEspeakPause("a"));
   // Every mapped phoneme is one the cueing rules know, except the uncued [h], [ʔ].
-  for (const char* name : {"a", "e", "E", "i", "o", "O", "u", "y", "Y", "W", "@", "A~", "E~", "O~", "W~",
-                           "p", "b", "t", "d", "k", "g", "f", "v", "s", "z", "S", "Z", "m", "n", "n^",
-                           "N", "l", "r", "j", "w", "I", "V", "0", "3:", "aI", "dZ"}) {
+  for (const char* name :
+       {"a", "e", "E", "i", "o", "O", "u", "y", "Y",  "W", "@", "A~", "E~", "O~", "W~", "p", "b", "t",  "d",  "k", "g",
+        "f", "v", "s", "z", "S", "Z", "m", "n", "n^", "N", "l", "r",  "j",  "w",  "I",  "V", "0", "3:", "aI", "dZ"}) {
     for (const std::string& ipa : EspeakToIpaPhones(name))
       EXPECT_TRUE(IsVowel(ipa) || IsConsonant(ipa)) << name << " -> " << ipa;
   }

@@ -29,9 +29,9 @@ class TempDir {
 }  // namespace csw::testing
 
 // Skips the current test with a clear message when ../shared/data is absent.
-#define CSW_REQUIRE_SHARED_DATA(rel)                                                  \
-  do {                                                                                \
-    if (::csw::testing::SharedData(rel).empty())                                      \
-      GTEST_SKIP() << "shared test data not found: ../shared/data/" << (rel)          \
-                   << " (set CSW_SHARED_DATA to the folder to run this test)";         \
+#define CSW_REQUIRE_SHARED_DATA(rel)                                           \
+  do {                                                                         \
+    if (::csw::testing::SharedData(rel).empty())                               \
+      GTEST_SKIP() << "shared test data not found: ../shared/data/" << (rel)   \
+                   << " (set CSW_SHARED_DATA to the folder to run this test)"; \
   } while (0)

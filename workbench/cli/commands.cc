@@ -60,7 +60,10 @@ class InspectCommand : public Command {
   }
   int Run(Progress& progress) override {
     nlohmann::json facts = jobs::Inspect(file_, progress);
-    if (json_) PrintJson(facts); else std::cout << jobs::InspectText(facts);
+    if (json_)
+      PrintJson(facts);
+    else
+      std::cout << jobs::InspectText(facts);
     return 0;
   }
 
@@ -108,7 +111,10 @@ class InfoCommand : public Command {
   }
   int Run(Progress&) override {
     nlohmann::json info = jobs::Info(corpus_);
-    if (json_) PrintJson(info); else std::cout << jobs::InfoText(info);
+    if (json_)
+      PrintJson(info);
+    else
+      std::cout << jobs::InfoText(info);
     return 0;
   }
 
@@ -216,8 +222,7 @@ class InvertCommand : public Command {
                               "its gaps filled as a new take <take>.filled");
     sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
     sub_->add_option("--models", options_.models, "Model file from csw fit")->required();
-    sub_->add_option("--takes", options_.takes, "Takes (name or name@first:end); default every take")
-        ->delimiter(',');
+    sub_->add_option("--takes", options_.takes, "Takes (name or name@first:end); default every take")->delimiter(',');
     sub_->add_option("--only", options_.only, "Invert only the face or the hand model")
         ->check(CLI::IsMember({"face", "hand"}));
     sub_->add_flag("--fill", options_.fill, "Write the filled takes into the corpus as new takes");

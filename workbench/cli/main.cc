@@ -25,8 +25,7 @@ void OnSigint(int) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"csw — the Cued Speech Workbench: motion-capture corpora, models and cued-speech synthesis",
-               "csw"};
+  CLI::App app{"csw — the Cued Speech Workbench: motion-capture corpora, models and cued-speech synthesis", "csw"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("csw ") + CSW_VERSION);
   bool quiet = false;

@@ -73,14 +73,10 @@ json EventsJson(const std::vector<Event>& events) {
 }
 
 json TakeFacts(const Take& t) {
-  return {{"markers", t.marker_names.size()},
-          {"frames", t.frames()},
-          {"first_frame", t.first_frame},
-          {"rate_hz", t.rate_hz},
-          {"units", t.source_units},
-          {"valid_point_samples", t.markers.CountVisible()},
-          {"labels", t.marker_names},
-          {"warnings", t.provenance.warnings}};
+  return {{"markers", t.marker_names.size()}, {"frames", t.frames()},
+          {"first_frame", t.first_frame},     {"rate_hz", t.rate_hz},
+          {"units", t.source_units},          {"valid_point_samples", t.markers.CountVisible()},
+          {"labels", t.marker_names},         {"warnings", t.provenance.warnings}};
 }
 
 }  // namespace
@@ -129,7 +125,8 @@ json Inspect(const std::string& path, Progress& progress) {
     j.update({{"tiers", TierJson(tiers)}, {"warnings", warnings}});
   } else if (format == "wav") {
     Audio a = ReadWav(path);
-    j.update({{"rate_hz", a.rate_hz}, {"channels", a.channels}, {"frames", a.frames()}, {"duration_s", a.duration_s()}});
+    j.update(
+        {{"rate_hz", a.rate_hz}, {"channels", a.channels}, {"frames", a.frames()}, {"duration_s", a.duration_s()}});
   } else if (format == "corpus") {
     j.update(Info(path));
   } else {
@@ -187,7 +184,8 @@ ImportResult Import(const ImportOptions& options, Progress& progress) {
     if (!takes.count(stem)) order.push_back(stem);
     TakeFiles& t = takes[stem];
     auto set = [&](std::string& slot, const std::string& what) {
-      if (!slot.empty()) throw InvalidInput(f + ": a second " + what + " for take \"" + stem + "\" (first: " + slot + ")");
+      if (!slot.empty())
+        throw InvalidInput(f + ": a second " + what + " for take \"" + stem + "\" (first: " + slot + ")");
       slot = f;
     };
     if (fmt == "c3d" || fmt == "trc") {
@@ -288,9 +286,9 @@ ImportResult Import(const ImportOptions& options, Progress& progress) {
         c3d->ReadFrames(f, n, points.data(), nullptr, analog_per_frame ? analog.data() : nullptr);
         writer.AppendFrames(points.data(), n);
         if (analog_per_frame) writer.AppendAnalog(analog.data(), n * info.analog_subframes_per_frame);
-        progress.Update("import " + stem,
-                        (static_cast<double>(done_bytes) + static_cast<double>(file_bytes) * (f + n) / std::max<int64_t>(frames, 1)) /
-                            static_cast<double>(total_bytes));
+        progress.Update("import " + stem, (static_cast<double>(done_bytes) +
+                                           static_cast<double>(file_bytes) * (f + n) / std::max<int64_t>(frames, 1)) /
+                                              static_cast<double>(total_bytes));
       }
       writer.Finish();
       result.frames += frames;
@@ -332,7 +330,10 @@ json Info(const std::string& corpus_path) {
     total_s += t.duration_s;
     total_frames += t.frames;
   }
-  return {{"corpus", corpus_path}, {"takes", takes}, {"take_count", takes.size()}, {"frames", total_frames},
+  return {{"corpus", corpus_path},
+          {"takes", takes},
+          {"take_count", takes.size()},
+          {"frames", total_frames},
           {"duration_s", total_s}};
 }
 

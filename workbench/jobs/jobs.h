@@ -62,14 +62,14 @@ struct SimulateJobOptions {
   std::string corpus = "sentences";  // shapes, visemes, sentences, or demo (all three)
   std::string output;
   uint64_t seed = 1;
-  int count = 0;                      // sentences: first N (0 = all / demo default 20)
-  std::vector<std::string> texts;     // user sentences instead of the shipped list
-  std::string sentences_file;         // one sentence per line
+  int count = 0;                   // sentences: first N (0 = all / demo default 20)
+  std::vector<std::string> texts;  // user sentences instead of the shipped list
+  std::string sentences_file;      // one sentence per line
   double noise_mm = 0.2;
   bool occlusions = true;
   bool label_swaps = false;
   double rate_hz = 120.0;
-  bool clean = false;                 // also write <take>.clean.c3d without artefacts
+  bool clean = false;  // also write <take>.clean.c3d without artefacts
   std::string Check() const;
 };
 std::vector<std::string> Simulate(const SimulateJobOptions& options, Progress& progress);

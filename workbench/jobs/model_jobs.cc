@@ -192,10 +192,14 @@ ModelConfig LoadConfig(const std::string& path) {
     const json& r = j["rigid"];
     CheckKeys(r, {"loss", "loss_scale_mm", "motion_variance"}, path, "rigid");
     const std::string loss = Get<std::string>(r, "loss", "cauchy", path, "rigid");
-    if (loss == "cauchy") c.rigid.rigid.loss = RobustLoss::kCauchy;
-    else if (loss == "huber") c.rigid.rigid.loss = RobustLoss::kHuber;
-    else if (loss == "none") c.rigid.rigid.loss = RobustLoss::kNone;
-    else throw ConfigError(path, "rigid.loss must be cauchy, huber or none");
+    if (loss == "cauchy")
+      c.rigid.rigid.loss = RobustLoss::kCauchy;
+    else if (loss == "huber")
+      c.rigid.rigid.loss = RobustLoss::kHuber;
+    else if (loss == "none")
+      c.rigid.rigid.loss = RobustLoss::kNone;
+    else
+      throw ConfigError(path, "rigid.loss must be cauchy, huber or none");
     c.rigid.rigid.loss_scale_mm = Get<double>(r, "loss_scale_mm", 1.0, path, "rigid");
     c.rigid.motion_variance = Get<double>(r, "motion_variance", 0.99, path, "rigid");
     if (!(c.rigid.rigid.loss_scale_mm > 0)) throw ConfigError(path, "rigid.loss_scale_mm must be > 0");
@@ -311,7 +315,8 @@ std::vector<GuidedPcaStep> FaceSteps(const ModelConfig& c, const FaceLayout& lay
     for (const auto& n : names) {
       auto it = idx.find(n);
       if (it == idx.end()) {
-        throw InvalidInput(file + ": " + where + ": marker '" + n + "' is not a face or throat marker of the marker set");
+        throw InvalidInput(file + ": " + where + ": marker '" + n +
+                           "' is not a face or throat marker of the marker set");
       }
       out.push_back(it->second);
     }
@@ -489,8 +494,8 @@ void ResolveTakeRange(TakeRange* r, int64_t frames) {
   const int64_t first = value(r->first);
   const int64_t end = open_end ? frames : value(r->count);
   if (first < 0 || end > frames || end <= first) {
-    throw InvalidInput("take range '" + r->spec + "': frames [" + std::to_string(first) + ", " +
-                       std::to_string(end) + ") are not inside the take's " + std::to_string(frames) + " frames");
+    throw InvalidInput("take range '" + r->spec + "': frames [" + std::to_string(first) + ", " + std::to_string(end) +
+                       ") are not inside the take's " + std::to_string(frames) + " frames");
   }
   r->first = first;
   r->count = end - first;
@@ -744,8 +749,8 @@ struct ModelRun {
   const FaceModel* face = nullptr;
   const HandModel* hand = nullptr;
   MarkerSet set;
-  std::vector<std::string> names;  // model order
-  int cluster = 0;                 // cluster markers first
+  std::vector<std::string> names;   // model order
+  int cluster = 0;                  // cluster markers first
   std::vector<TakeRange> training;  // parsed training specs
   double target_mm = 0;
   const RigidModel& rigid() const { return face ? face->head : hand->forearm; }
@@ -754,10 +759,10 @@ struct ModelRun {
 struct TakeJob {
   const ModelRun* run = nullptr;
   TakeRange range;
-  MarkerArray original;  // model order
-  MarkerArray input;     // after hiding
+  MarkerArray original;                         // model order
+  MarkerArray input;                            // after hiding
   std::vector<std::pair<int64_t, int>> hidden;  // (frame, column) hidden on purpose
-  MarkerArray truth;     // clean markers (model order), empty when none
+  MarkerArray truth;                            // clean markers (model order), empty when none
   InversionResult result;
   MarkerArray model_only;  // reconstruction before the gap correction
   std::string role;
@@ -852,8 +857,8 @@ json Invert(const InvertOptions& options, Progress& progress) {
           throw InvalidInput(options.truth + ": " + ranges[i].take + ".clean.c3d has " +
                              std::to_string(clean.frames()) + " frames, the take " + std::to_string(take.frames()));
         }
-        const std::vector<int> tc = BindNames(run->set, clean.marker_names, run->names,
-                                              options.truth + "/" + ranges[i].take + ".clean.c3d");
+        const std::vector<int> tc =
+            BindNames(run->set, clean.marker_names, run->names, options.truth + "/" + ranges[i].take + ".clean.c3d");
         job->truth = Extract(clean.markers, tc, ranges[i].first, ranges[i].count);
       }
       job->role = "held_out";
@@ -867,9 +872,9 @@ json Invert(const InvertOptions& options, Progress& progress) {
   }
 
   // Invert in parallel over (model, take) pairs.
-  const int threads = std::max(1, std::min<int>(options.threads > 0 ? options.threads
-                                                                     : static_cast<int>(std::thread::hardware_concurrency()),
-                                                 static_cast<int>(jobs.size())));
+  const int threads = std::max(
+      1, std::min<int>(options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency()),
+                       static_cast<int>(jobs.size())));
   std::atomic<size_t> next{0};
   std::atomic<int> running{threads};
   auto worker = [&]() {
@@ -968,9 +973,9 @@ json Invert(const InvertOptions& options, Progress& progress) {
             for (int k = 0; k < 3; ++k) obs(k, c) = job.truth.at(f, c)[k];
           const RigidFit truth_pose = EstimateRigidKabsch(run->rigid().reference, obs);
           if (!truth_pose.valid) continue;
-          const RigidTransform est =
-              RigidTransform::FromParameters(res.pose.row(f).transpose().head<6>().eval());
-          rot.Add(Eigen::AngleAxisd(est.rotation.transpose() * truth_pose.transform.rotation).angle() * 180.0 / 3.14159265358979323846);
+          const RigidTransform est = RigidTransform::FromParameters(res.pose.row(f).transpose().head<6>().eval());
+          rot.Add(Eigen::AngleAxisd(est.rotation.transpose() * truth_pose.transform.rotation).angle() * 180.0 /
+                  3.14159265358979323846);
           trans.Add((est.translation - truth_pose.transform.translation).norm());
         }
       }
@@ -1047,8 +1052,9 @@ json Invert(const InvertOptions& options, Progress& progress) {
       report::EnsureGuiApplication();
       for (const char* ext : {".png", ".svg"}) {
         const std::string p = (fs::path(options.figures) / (run->kind + "_errors" + ext)).string();
-        report::SaveErrorBars(p, run->kind == "face" ? "Face: reconstruction error per take" : "Hand: reconstruction error per take",
-                              bars, run->target_mm);
+        report::SaveErrorBars(
+            p, run->kind == "face" ? "Face: reconstruction error per take" : "Hand: reconstruction error per take",
+            bars, run->target_mm);
         AddFigure(summary, p);
       }
     }
@@ -1090,8 +1096,7 @@ json Invert(const InvertOptions& options, Progress& progress) {
       std::string used;
       for (const auto& u : models_used) used += (used.empty() ? "" : "+") + u;
       take.provenance.warnings.push_back("gaps filled by csw invert (" + used + " model from " + options.models +
-                                         ") from take '" + ranges[i].spec + "': " + std::to_string(count) +
-                                         " samples");
+                                         ") from take '" + ranges[i].spec + "': " + std::to_string(count) + " samples");
       tx.WriteTake(take);
       filled.push_back({{"take", ranges[i].spec}, {"filled_take", take.name}, {"samples_filled", count}});
       progress.Update("writing filled takes", static_cast<double>(i + 1) / static_cast<double>(ranges.size()));

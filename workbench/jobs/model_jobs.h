@@ -2,8 +2,8 @@
 // Model jobs (issue 4): fit rigid/face/hand models from a corpus and a marker
 // set, and invert them on takes to fill gaps and report reconstruction errors.
 // Shared by `csw fit`, `csw invert` and the GUI.
-#include <nlohmann/json.hpp>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -16,7 +16,7 @@ namespace csw::jobs {
 // end exclusive, either may be omitted) or with percentages of the take's
 // length ("name@:50%", "name@50%:"). Resolved against the take's frame count.
 struct TakeRange {
-  std::string spec;   // as given
+  std::string spec;  // as given
   std::string take;
   int64_t first = 0;
   int64_t count = -1;  // -1 = to the end (before Resolve)

@@ -1,13 +1,11 @@
 #include "workbench/report/report.h"
 
+#include <qcustomplot.h>
 #include <unistd.h>
 
+#include <QApplication>
 #include <QDir>
 #include <QFile>
-
-#include <qcustomplot.h>
-
-#include <QApplication>
 #include <QFontMetrics>
 #include <QThread>
 #include <algorithm>

@@ -119,7 +119,8 @@ TEST(C3dRoundTrip, Int16StorageIsWithinHalfAScaleStep) {
     }
   }
   ASSERT_EQ(back.analog.data.size(), t.analog.data.size());
-  for (size_t i = 0; i < t.analog.data.size(); ++i) ASSERT_NEAR(back.analog.data[i], t.analog.data[i], 1.0 / 32000) << i;
+  for (size_t i = 0; i < t.analog.data.size(); ++i)
+    ASSERT_NEAR(back.analog.data[i], t.analog.data[i], 1.0 / 32000) << i;
   // Half the bytes of float storage (for the data part).
   const std::string fpath = (dir / "float.c3d").string();
   WriteC3d(fpath, t);

@@ -42,8 +42,7 @@ TEST_P(EafSample, TiersCountsAndTimes) {
   auto tiers = ReadEaf(SharedData(rel).string(), &warnings);
   EXPECT_TRUE(warnings.empty()) << warnings.front();
   ASSERT_EQ(tiers.size(), 6u);
-  const char* names[] = {"text",     "words-timesub", "words-symsub",
-                         "gestures", "gest_included", "words-pos"};
+  const char* names[] = {"text", "words-timesub", "words-symsub", "gestures", "gest_included", "words-pos"};
   const size_t counts[] = {399, 1995, 1995, 1197, 1197, 1995};
   for (size_t i = 0; i < 6; ++i) {
     EXPECT_EQ(tiers[i].name, names[i]);
@@ -51,9 +50,8 @@ TEST_P(EafSample, TiersCountsAndTimes) {
     EXPECT_EQ(tiers[i].kind, LabelTier::Kind::kInterval);
     EXPECT_EQ(tiers[i].start_s, 0.0);
     EXPECT_EQ(tiers[i].end_s, 1199.0);  // largest TIME_VALUE is 1199000 ms
-    EXPECT_TRUE(
-        std::is_sorted(tiers[i].labels.begin(), tiers[i].labels.end(),
-                       [](const Label& a, const Label& b) { return a.start_s < b.start_s; }));
+    EXPECT_TRUE(std::is_sorted(tiers[i].labels.begin(), tiers[i].labels.end(),
+                               [](const Label& a, const Label& b) { return a.start_s < b.start_s; }));
   }
   // text a1: ts2 (2000) .. ts19 (5000).
   ExpectLabel(tiers[0].labels[0], 2.0, 5.0, "The quick brown fox 001");
@@ -80,8 +78,7 @@ TEST_P(EafSample, TiersCountsAndTimes) {
   ExpectLabel(tiers[5].labels[3], 3.8, 4.4, "n");
 }
 
-INSTANTIATE_TEST_SUITE_P(Versions, EafSample,
-                         ::testing::Values("sample_2.7.eaf", "sample_2.8.eaf", "sample_3.0.eaf"));
+INSTANTIATE_TEST_SUITE_P(Versions, EafSample, ::testing::Values("sample_2.7.eaf", "sample_2.8.eaf", "sample_3.0.eaf"));
 
 TEST(EafRoundTrip, SampleWriteReadKeepsNonEmptyLabels) {
   CSW_REQUIRE_SHARED_DATA("eaf/pympi/sample_2.8.eaf");
@@ -146,9 +143,7 @@ TEST(EafRoundTrip, MillisecondTiersAreExact) {
   const std::string xml = ReadBytes(out);
   EXPECT_EQ(std::count(xml.begin(), xml.end(), '\n') > 0, true);
   size_t slots = 0;
-  for (size_t p = xml.find("<TIME_SLOT "); p != std::string::npos;
-       p = xml.find("<TIME_SLOT ", p + 1))
-    ++slots;
+  for (size_t p = xml.find("<TIME_SLOT "); p != std::string::npos; p = xml.find("<TIME_SLOT ", p + 1)) ++slots;
   EXPECT_EQ(slots, 13u);
 }
 
@@ -166,11 +161,9 @@ std::string Doc(const std::string& slots, const std::string& tiers) {
          slots + "</TIME_ORDER>\n" + tiers + "</ANNOTATION_DOCUMENT>\n";
 }
 std::string Slot(const std::string& id, const std::string& value) {
-  return "<TIME_SLOT TIME_SLOT_ID=\"" + id + "\"" +
-         (value.empty() ? "" : " TIME_VALUE=\"" + value + "\"") + "/>\n";
+  return "<TIME_SLOT TIME_SLOT_ID=\"" + id + "\"" + (value.empty() ? "" : " TIME_VALUE=\"" + value + "\"") + "/>\n";
 }
-std::string Aligned(const std::string& id, const std::string& s1, const std::string& s2,
-                    const std::string& v) {
+std::string Aligned(const std::string& id, const std::string& s1, const std::string& s2, const std::string& v) {
   return "<ANNOTATION><ALIGNABLE_ANNOTATION ANNOTATION_ID=\"" + id + "\" TIME_SLOT_REF1=\"" + s1 +
          "\" TIME_SLOT_REF2=\"" + s2 + "\"><ANNOTATION_VALUE>" + v +
          "</ANNOTATION_VALUE></ALIGNABLE_ANNOTATION></ANNOTATION>\n";
@@ -186,12 +179,12 @@ std::string Tier(const std::string& name, const std::string& body) {
 TEST(EafRead, UnalignableReferencesAreWarnedAndSkipped) {
   TempDir dir;
   const std::string path = (dir / "refs.eaf").string();
-  WriteBytes(path, Doc(Slot("t1", "1000") + Slot("t2", "3000") + Slot("u1", "") + Slot("u2", ""),
-                       Tier("main", Aligned("a1", "t1", "t2", "whole")) +
-                           Tier("float", Aligned("a2", "u1", "u2", "nowhere")) +
-                           Tier("cycle", Ref("c1", "c2", "x") + Ref("c2", "c1", "y")) +
-                           Tier("orphan", Ref("o1", "missing", "z")) +
-                           Tier("assoc", Ref("r1", "a1", "tr")) + Tier("empty", "")));
+  WriteBytes(
+      path,
+      Doc(Slot("t1", "1000") + Slot("t2", "3000") + Slot("u1", "") + Slot("u2", ""),
+          Tier("main", Aligned("a1", "t1", "t2", "whole")) + Tier("float", Aligned("a2", "u1", "u2", "nowhere")) +
+              Tier("cycle", Ref("c1", "c2", "x") + Ref("c2", "c1", "y")) + Tier("orphan", Ref("o1", "missing", "z")) +
+              Tier("assoc", Ref("r1", "a1", "tr")) + Tier("empty", "")));
   std::vector<std::string> warnings;
   auto tiers = ReadEaf(path, &warnings);
   ASSERT_EQ(tiers.size(), 3u);  // main, assoc, empty
@@ -212,10 +205,8 @@ TEST(EafRead, HostileInputsGiveOneParseErrorWithOffset) {
   const std::string ok_tier = Tier("t", Aligned("a1", "t1", "t2", "v"));
   for (const std::string& content :
        {std::string("not xml at all"), std::string(""), std::string("<A><B></A>"),
-        std::string("<?xml version=\"1.0\"?><TEXTGRID/>"),
-        Doc(Slot("t1", "nan") + Slot("t2", "10"), ok_tier),
-        Doc(Slot("t1", "-5") + Slot("t2", "10"), ok_tier),
-        Doc(Slot("t1", "1e999") + Slot("t2", "10"), ok_tier),
+        std::string("<?xml version=\"1.0\"?><TEXTGRID/>"), Doc(Slot("t1", "nan") + Slot("t2", "10"), ok_tier),
+        Doc(Slot("t1", "-5") + Slot("t2", "10"), ok_tier), Doc(Slot("t1", "1e999") + Slot("t2", "10"), ok_tier),
         Doc(Slot("t1", "inf") + Slot("t2", "10"), ok_tier),
         Doc(Slot("t1", "0") + Slot("t2", "10"), Tier("t", Aligned("a1", "t1", "t9", "v"))),
         Doc(Slot("t1", "500") + Slot("t2", "10"), ok_tier)}) {

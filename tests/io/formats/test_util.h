@@ -25,8 +25,7 @@ inline std::string ReadBytes(const std::string& path) {
 // file (by its file name) and, when expect_line > 0, that line; when
 // expect_line == 0 it requires a line or an offset; when expect_line < 0 (audio
 // decoded by libsndfile) only the file name. Returns the message.
-inline std::string ExpectParseError(const std::function<void()>& fn, const std::string& path,
-                                    int64_t expect_line = 0) {
+inline std::string ExpectParseError(const std::function<void()>& fn, const std::string& path, int64_t expect_line = 0) {
   try {
     fn();
   } catch (const csw::ParseError& e) {

@@ -67,8 +67,7 @@ TEST(Numbers, ParseOnlyFiniteWholeTokens) {
   EXPECT_EQ(ParseFiniteDouble(".5"), 0.5);
   EXPECT_EQ(ParseFiniteDouble("-1e-3"), -0.001);
   EXPECT_TRUE(std::signbit(*ParseFiniteDouble("-0")));
-  for (const char* bad :
-       {"", "+", "nan", "NaN", "inf", "-inf", "1e999", "0x10", "1.5x", " 1", "1,5", "--1"}) {
+  for (const char* bad : {"", "+", "nan", "NaN", "inf", "-inf", "1e999", "0x10", "1.5x", " 1", "1,5", "--1"}) {
     EXPECT_FALSE(ParseFiniteDouble(bad).has_value()) << bad;
   }
   EXPECT_EQ(ParseInt("+42"), 42);

@@ -21,9 +21,7 @@ using testing::SharedData;
 using testing::TempDir;
 using testing::WriteBytes;
 
-std::string Praatio(const std::string& name) {
-  return SharedData("textgrid/praatio/" + name).string();
-}
+std::string Praatio(const std::string& name) { return SharedData("textgrid/praatio/" + name).string(); }
 
 void ExpectSameTiers(const std::vector<LabelTier>& a, const std::vector<LabelTier>& b) {
   ASSERT_EQ(a.size(), b.size());
@@ -85,8 +83,7 @@ TEST(TextGridRead, MaryLongUtf16BeEqualsShortUtf8) {
 
 TEST(TextGridRead, NegativeZeroReadsAsZero) {
   CSW_REQUIRE_SHARED_DATA("textgrid/praatio/mary_with_negative_zero.TextGrid");
-  for (const char* name :
-       {"mary_with_negative_zero.TextGrid", "mary_longfile_with_negative_zero.TextGrid"}) {
+  for (const char* name : {"mary_with_negative_zero.TextGrid", "mary_longfile_with_negative_zero.TextGrid"}) {
     double xmin = 1;
     auto tiers = ReadTextGrid(Praatio(name), &xmin);
     EXPECT_EQ(xmin, 0.0);
@@ -126,8 +123,7 @@ TEST(TextGridRead, WordsWithNewlinesAndEscapedQuotes) {
   EXPECT_EQ(tiers[2].name, "");
   EXPECT_EQ(tiers[2].kind, LabelTier::Kind::kPoint);
   ASSERT_EQ(tiers[2].labels.size(), 4u);
-  ExpectLabel(tiers[2].labels[0], 0.23290458517889742, 0.23290458517889742,
-              "133\n\"\"\"p1\"\"\"\np1");
+  ExpectLabel(tiers[2].labels[0], 0.23290458517889742, 0.23290458517889742, "133\n\"\"\"p1\"\"\"\np1");
   ExpectLabel(tiers[2].labels[1], 0.5304541883551366, 0.5304541883551366, "0\np2");
 }
 
@@ -220,8 +216,7 @@ TEST(TextGridRoundTrip, EveryPraatioFileBothFormats) {
 
 TEST(TextGridWrite, LongFormatLayoutMatchesPraat) {
   TempDir dir;
-  LabelTier words{
-      "words", LabelTier::Kind::kInterval, 0, 1, {{0, 0.5, "say \"hi\""}, {0.5, 1, ""}}};
+  LabelTier words{"words", LabelTier::Kind::kInterval, 0, 1, {{0, 0.5, "say \"hi\""}, {0.5, 1, ""}}};
   LabelTier marks{"marks", LabelTier::Kind::kPoint, 0, 1, {{0.25, 0.25, "p"}}};
   const std::string out = (dir / "w.TextGrid").string();
   WriteTextGrid(out, {words, marks}, 0, 1);
@@ -367,9 +362,8 @@ TEST(TextGridRead, HostileInputsGiveOneParseErrorWithLine) {
     ExpectParseError([&] { ReadTextGrid(path); }, path, c.line);
   }
   // Binary and broken UTF-16 are reported with an offset.
-  for (const std::string& bytes :
-       {std::string("ooBinaryFile\x08TextGrid", 21), std::string("\xFF\xFE\x41\x00\x42", 5),
-        std::string("\xFE\xFF\xDC\x00\x00\x41", 6), std::string("", 0)}) {
+  for (const std::string& bytes : {std::string("ooBinaryFile\x08TextGrid", 21), std::string("\xFF\xFE\x41\x00\x42", 5),
+                                   std::string("\xFE\xFF\xDC\x00\x00\x41", 6), std::string("", 0)}) {
     WriteBytes(path, bytes);
     ExpectParseError([&] { ReadTextGrid(path); }, path);
   }

@@ -153,8 +153,8 @@ TEST(TrcRead, OtherSamplesShapes) {
     int64_t frames, markers;
     double rate;
   };
-  for (const Case& c : {Case{"Anto.trc", 128, 34, 100}, Case{"Res16bits.trc", 100, 44, 100},
-                        Case{"SprintMotion.trc", 788, 59, 250}}) {
+  for (const Case& c :
+       {Case{"Anto.trc", 128, 34, 100}, Case{"Res16bits.trc", 100, 44, 100}, Case{"SprintMotion.trc", 788, 59, 250}}) {
     if (SharedData(std::string(kBtk) + c.file).empty()) GTEST_SKIP() << "shared data absent";
     Take take = ReadBtk(c.file);
     EXPECT_EQ(take.frames(), c.frames) << c.file;
@@ -209,10 +209,9 @@ TEST(TrcRead, MissingFileIsIoError) {
 TEST(TrcRoundTrip, EveryBtkSample) {
   TempDir dir;
   int read = 0;
-  for (const char* name :
-       {"10002-20130626160334-Unnamed.trc", "10002-20130731010438-Unnamed.trc", "Anto.trc",
-        "Gait.trc", "Knee.trc", "Res16bits.trc", "SprintCalib.trc", "SprintMotion.trc",
-        "UpperLimbStatic.trc", "MOTEK/T.trc", "MOTEK/ballet_reduced.trc"}) {
+  for (const char* name : {"10002-20130626160334-Unnamed.trc", "10002-20130731010438-Unnamed.trc", "Anto.trc",
+                           "Gait.trc", "Knee.trc", "Res16bits.trc", "SprintCalib.trc", "SprintMotion.trc",
+                           "UpperLimbStatic.trc", "MOTEK/T.trc", "MOTEK/ballet_reduced.trc"}) {
     if (SharedData(std::string(kBtk) + name).empty()) continue;
     Take a = ReadBtk(name);
     const std::string out = (dir / "rt.trc").string();
@@ -264,13 +263,12 @@ TEST(TrcWrite, RejectsInconsistentTakes) {
 
 // --- Synthetic files with known content --------------------------------------
 
-std::string Header(const std::string& units, int frames, int markers,
-                   const std::string& rate = "100.00") {
+std::string Header(const std::string& units, int frames, int markers, const std::string& rate = "100.00") {
   return "PathFileType\t4\t(X/Y/Z)\tx.trc\n"
          "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOri"
          "gNumFrames\n" +
-         rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) +
-         "\t" + units + "\t" + rate + "\t1\t" + std::to_string(frames) + "\n";
+         rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) + "\t" + units + "\t" +
+         rate + "\t1\t" + std::to_string(frames) + "\n";
 }
 
 TEST(TrcRead, UnitsAreConvertedToMillimetres) {
@@ -309,10 +307,9 @@ TEST(TrcRead, PartialAndNanCellsAreMissing) {
 TEST(TrcRead, SpaceSeparatedFileAndNoBlankLine) {
   TempDir dir;
   const std::string path = (dir / "s.trc").string();
-  WriteBytes(
-      path,
-      "PathFileType 4 (X/Y/Z) s.trc\r\nDataRate CameraRate NumFrames NumMarkers Units\r\n"
-      "60 60 2 1 mm\r\nFrame# Time M1\r\n X1 Y1 Z1\r\n1 0 1.5 2.5 3.5\r\n2 0.0167 4 5 6\r\n");
+  WriteBytes(path,
+             "PathFileType 4 (X/Y/Z) s.trc\r\nDataRate CameraRate NumFrames NumMarkers Units\r\n"
+             "60 60 2 1 mm\r\nFrame# Time M1\r\n X1 Y1 Z1\r\n1 0 1.5 2.5 3.5\r\n2 0.0167 4 5 6\r\n");
   Take take = ReadTrc(path);
   EXPECT_EQ(take.rate_hz, 60.0);
   ASSERT_EQ(take.marker_names, std::vector<std::string>{"M1"});
@@ -323,8 +320,7 @@ TEST(TrcRead, SpaceSeparatedFileAndNoBlankLine) {
 TEST(TrcRead, TruncatedDataGivesRowsPresentAndWarns) {
   TempDir dir;
   const std::string path = (dir / "t.trc").string();
-  WriteBytes(path, Header("mm", 1000000000, 1) +
-                       "Frame#\tTime\tA\t\t\n\t\tX1\tY1\tZ1\n1\t0\t1\t2\t3\n2\t0.01\t4\t5");
+  WriteBytes(path, Header("mm", 1000000000, 1) + "Frame#\tTime\tA\t\t\n\t\tX1\tY1\tZ1\n1\t0\t1\t2\t3\n2\t0.01\t4\t5");
   Take take = ReadTrc(path);
   ASSERT_EQ(take.frames(), 2);
   ExpectMarker(take, 0, 0, 1, 2, 3);

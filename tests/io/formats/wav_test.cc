@@ -29,9 +29,8 @@ Audio Sine(double rate, int channels, int64_t frames, double freq, double amplit
   a.samples.resize(static_cast<size_t>(frames * channels));
   for (int64_t f = 0; f < frames; ++f) {
     for (int c = 0; c < channels; ++c) {
-      a.samples[static_cast<size_t>(f * channels + c)] =
-          static_cast<float>(amplitude * std::sin(2 * std::numbers::pi * freq * (c + 1) *
-                                                  static_cast<double>(f) / rate));
+      a.samples[static_cast<size_t>(f * channels + c)] = static_cast<float>(
+          amplitude * std::sin(2 * std::numbers::pi * freq * (c + 1) * static_cast<double>(f) / rate));
     }
   }
   return a;

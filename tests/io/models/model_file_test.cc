@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -17,8 +18,6 @@
 #include <functional>
 #include <limits>
 #include <sstream>
-
-#include <Eigen/Geometry>
 
 #include "core/error.h"
 #include "io/corpus/corpus.h"
@@ -188,8 +187,9 @@ std::string ErrorOf(F f) {
   return "";
 }
 
-#define EXPECT_CONTAINS(haystack, needle) \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << "'" << (haystack) << "' lacks '" << (needle) << "'"
+#define EXPECT_CONTAINS(haystack, needle)                          \
+  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) \
+      << "'" << (haystack) << "' lacks '" << (needle) << "'"
 
 // Raw HDF5 access to damage files the way other tools could.
 class RawFile {
@@ -237,8 +237,8 @@ class RawFile {
       ASSERT_GE(H5Adelete_by_name(id_, obj.c_str(), name.c_str(), H5P_DEFAULT), 0);
     }
     hid_t space = H5Screate(H5S_SCALAR);
-    hid_t a = H5Acreate_by_name(id_, obj.c_str(), name.c_str(), H5T_STD_I64LE, space, H5P_DEFAULT, H5P_DEFAULT,
-                                H5P_DEFAULT);
+    hid_t a =
+        H5Acreate_by_name(id_, obj.c_str(), name.c_str(), H5T_STD_I64LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
     ASSERT_GE(a, 0);
     ASSERT_GE(H5Awrite(a, H5T_NATIVE_INT64, &value), 0);
     H5Aclose(a);
@@ -326,7 +326,7 @@ TEST(ModelFile, EmptyListsAndLargeTextRoundTrip) {
   f.face->info.config_json = std::string(300000, 'x') + "ü";  // beyond the 64 KiB compact attribute limit
   f.hand = MakeHand();
   f.hand->shape.regression.warnings.clear();
-  f.hand->rest.clear();  // = identity for every segment
+  f.hand->rest.clear();                               // = identity for every segment
   f.head = MakeRigid("head", {"a", "b", "c"}, 0, 7);  // no motion component kept
   const std::string path = (dir / "m.h5").string();
   SaveModelFile(path, f);
@@ -471,10 +471,10 @@ TEST(ModelFile, NewerVersionIsAParseError) {
 }
 
 struct Damage {
-  std::string dataset;                // replaced, or deleted when dims is empty
+  std::string dataset;  // replaced, or deleted when dims is empty
   std::vector<hsize_t> dims;
-  std::vector<double> values;         // empty: zeros
-  std::string expected;               // in the message, besides the file and dataset
+  std::vector<double> values;  // empty: zeros
+  std::string expected;        // in the message, besides the file and dataset
 };
 
 TEST(ModelFile, MisShapedOrMissingDatasetIsAParseErrorNamingIt) {
@@ -499,14 +499,15 @@ TEST(ModelFile, MisShapedOrMissingDatasetIsAParseErrorNamingIt) {
       {"/forearm_motion/motion/mean", {5}, {}, "has 5 elements, expected 6"},
       {"/face/head_weights", {7}, {1, 1, 1, 1, 1, 1.5, 0.25}, "outside [0, 1]"},
       {"/face/rest_pose/rotation", {3, 3}, {1, 0, 0, 0, 1, 0, 0, 0, 2}, "is not a rotation"},
-      {"/hand/rest", {3, 3, 3}, {1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, -1},
+      {"/hand/rest",
+       {3, 3, 3},
+       {1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, -1},
        "matrix [2] is not a rotation"},
       {"/hand/rest", {2, 3, 3}, {}, "has 2 elements, expected 3"},
       {"/hand/rest", {3, 9}, {}, "has rank 2, expected 3"},
       {"/face/shape/steps/001/markers", {2}, {1, 9}, "index 9 at position 1 is outside 0..6"},
       {"/hand/layout/segments/001/markers", {2}, {3, 2.5}, "is not an integer index"},
-      {"/hand/shape/angle_pca/variances", {4}, {1, 2, std::numeric_limits<double>::infinity(), 4},
-       "non-finite value"},
+      {"/hand/shape/angle_pca/variances", {4}, {1, 2, std::numeric_limits<double>::infinity(), 4}, "non-finite value"},
   };
   for (const Damage& d : cases) {
     SCOPED_TRACE(d.dataset + ": " + d.expected);
@@ -537,8 +538,7 @@ TEST(ModelFile, MisnumberedStepsAndWrongTypesAreParseErrors) {
   const std::string good_bytes = ReadBytes(path);
   {
     RawFile raw(path);
-    ASSERT_GE(H5Lmove(raw.id(), "/face/shape/steps/002", raw.id(), "/face/shape/steps/007", H5P_DEFAULT,
-                      H5P_DEFAULT),
+    ASSERT_GE(H5Lmove(raw.id(), "/face/shape/steps/002", raw.id(), "/face/shape/steps/007", H5P_DEFAULT, H5P_DEFAULT),
               0);
   }
   std::string msg = ErrorOf<ParseError>([&] { LoadModelFile(path); });

@@ -4,14 +4,13 @@
 // exactly as the fitted ones do.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "io/models/model_file.h"
 #include "tests/io/models/model_test_util.h"
@@ -149,8 +148,7 @@ TEST(ModelFileFitted, FaceAndHeadModelsPredictAndInvertIdentically) {
   const RigidTransform pose = PoseAt(17, 0.3);
   ExpectSameMatrix(face.ShapeMarkersInLab(pose, params), loaded.face->ShapeMarkersInLab(pose, params),
                    "face shape markers in the lab");
-  ExpectSameMatrix(face.MarkersInLab(pose, params), loaded.face->MarkersInLab(pose, params),
-                   "face markers in the lab");
+  ExpectSameMatrix(face.MarkersInLab(pose, params), loaded.face->MarkersInLab(pose, params), "face markers in the lab");
 
   MarkerArray test = MakeFaceTake(layout, 60, 2);
   for (int64_t f = 0; f < test.frames(); f += 3) test.SetMissing(f, 4 + f % 6);
@@ -183,8 +181,7 @@ TEST(ModelFileFitted, HandModelPredictsAndInvertsIdentically) {
   ExpectSameMatrix(hand.shape.Predict(params), loaded.hand->shape.Predict(params), "hand shape prediction");
   ExpectSameMatrix(hand.ShapeMarkersInLab(pose, params), loaded.hand->ShapeMarkersInLab(pose, params),
                    "hand shape markers in the lab");
-  ExpectSameMatrix(hand.MarkersInLab(pose, params), loaded.hand->MarkersInLab(pose, params),
-                   "hand markers in the lab");
+  ExpectSameMatrix(hand.MarkersInLab(pose, params), loaded.hand->MarkersInLab(pose, params), "hand markers in the lab");
 
   MarkerArray test = MakeHandTake(layout, 60, 2);
   for (int64_t f = 0; f < test.frames(); f += 4) test.SetMissing(f, 3 + f % 6);

@@ -19,8 +19,8 @@ inline void ExpectSameMatrix(const A& a, const B& b, const std::string& what) {
   ASSERT_EQ(a.cols(), b.cols()) << what;
   for (Eigen::Index c = 0; c < a.cols(); ++c)
     for (Eigen::Index r = 0; r < a.rows(); ++r)
-      EXPECT_TRUE(SameDouble(a(r, c), b(r, c))) << what << " (" << r << ", " << c << "): " << a(r, c) << " vs "
-                                                << b(r, c);
+      EXPECT_TRUE(SameDouble(a(r, c), b(r, c)))
+          << what << " (" << r << ", " << c << "): " << a(r, c) << " vs " << b(r, c);
 }
 
 inline void ExpectSameDoubles(const std::vector<double>& a, const std::vector<double>& b, const std::string& what) {
