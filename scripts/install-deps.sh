@@ -11,7 +11,7 @@ pkgs=(
   libgtest-dev libgmock-dev libbenchmark-dev
   qt6-base-dev qt6-base-dev-tools qt6-svg-dev qt6-multimedia-dev
   libqcustomplot-dev libqcustomplot2.1-qt6 libgl-dev
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev clang-format
   praat xvfb
 )
 missing=()

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite, from a fresh Debian 12 machine (run as root so missing
 # packages can be installed):
+#   0. check the formatting (scripts/check-format.sh);
 #   1. build with warnings as errors and run every test (ctest);
 #   2. build again with AddressSanitizer + UndefinedBehaviorSanitizer and rerun the tests;
 #   3. build the libFuzzer targets with clang and run each for CSW_FUZZ_SECONDS (default 60).
@@ -12,8 +13,13 @@ bash scripts/install-deps.sh
 jobs=$(nproc)
 export CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache}
 export CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-5G}
+# Paths relative to the checkout, so a fresh clone elsewhere reuses the cache.
+export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root} CCACHE_NOHASHDIR=${CCACHE_NOHASHDIR:-true}
 start=$(date +%s)
 stamp() { echo "== [$(( $(date +%s) - start )) s] $*"; }
+
+stamp "format (.clang-format)"
+bash scripts/check-format.sh
 
 stamp "build (warnings as errors)"
 cmake -S . -B build/ci -G Ninja -DCSW_WERROR=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
