@@ -7,6 +7,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -468,6 +470,24 @@ TEST(CliModels, FitRigidWritesFigures) {
   EXPECT_NE(r.err.find("/nonexistent/libcsw_figures.so"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "m2.h5"));
   EXPECT_FALSE(fs::exists(dir / "figs2"));
+}
+
+// Issue 10: Qt is loaded only for --figures (libcsw_figures.so, dlopen); the
+// csw binary itself links no Qt library, directly or through a dependency.
+TEST(CliModels, CswDoesNotLinkQt) {
+  testing::TempDir dir;
+  const std::string cmd = "ldd " + std::string(CSW_BINARY) + " > " + Q(dir / "ldd.txt");
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream in(dir / "ldd.txt");
+  std::string line;
+  int libraries = 0, qt = 0;
+  while (std::getline(in, line)) {
+    ++libraries;
+    std::transform(line.begin(), line.end(), line.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (line.find("libqt") != std::string::npos || line.find("qcustomplot") != std::string::npos) ++qt;
+  }
+  EXPECT_GT(libraries, 3);  // libc, libstdc++, libm at least: ldd did list the binary's libraries
+  EXPECT_EQ(qt, 0);
 }
 
 // Issue 10: two fits writing one model file at the same time. Either both
