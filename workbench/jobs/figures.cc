@@ -17,6 +17,7 @@ namespace {
 
 constexpr const char* kModuleName = "libcsw_figures.so";
 
+#ifdef CSW_HAVE_FIGURES_MODULE
 std::vector<std::string> Candidates() {
   std::vector<std::string> out;
   if (const char* env = std::getenv("CSW_FIGURES_MODULE"); env && *env) return {env};  // the only place then
@@ -31,6 +32,7 @@ std::vector<std::string> Candidates() {
 #endif
   return out;
 }
+#endif
 
 const report::FiguresApi* LoadApi() {
 #ifndef CSW_HAVE_FIGURES_MODULE
