@@ -104,15 +104,16 @@ TEST(CliModels, VirtualCuerAcceptance) {
 
   const json inv = RunJson("invert " + Q(corpus) + " --models " + Q(models) + " --truth " + Q(sim), dir.path());
   ASSERT_TRUE(inv.contains("face") && inv.contains("hand"));
-  // Limits stated here, 15–30 % above the values measured when the hand's
+  // Limits stated here, about 20 % above the values measured when the hand's
   // Gaussian gap filler landed (docs/models.md: face 0.320 / 0.322 mm visible,
   // 0.127 mm occluded, pose 0.067° / 0.073 mm; hand 1.116 / 1.362 mm visible,
   // 2.56 mm occluded, pose 0.179° / 0.122 mm), within issue 4's targets (visible
-  // face ≤ 1 mm, hand ≤ 2 mm, occluded ≤ 3 mm, pose ≤ 0.5° / 0.5 mm).
+  // face ≤ 1 mm, hand ≤ 2 mm, occluded ≤ 3 mm, pose ≤ 0.5° / 0.5 mm). The
+  // occluded face limit, 0.20 mm, is wider (+57 %): it pools only ~800 samples.
   struct Limits {
     double training, held_out, occluded, rotation_deg, translation_mm;
   };
-  const std::map<std::string, Limits> limits = {{"face", {0.40, 0.40, 0.20, 0.09, 0.09}},
+  const std::map<std::string, Limits> limits = {{"face", {0.40, 0.40, 0.20, 0.08, 0.09}},
                                                 {"hand", {1.35, 1.65, 3.00, 0.22, 0.15}}};
   for (const char* kind : {"face", "hand"}) {
     SCOPED_TRACE(kind);
