@@ -1,11 +1,44 @@
 #include "models/inversion.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "core/error.h"
 
 namespace csw {
+
+namespace {
+
+double SampleSd(double m2, int64_t count) { return count > 1 ? std::sqrt(m2 / static_cast<double>(count - 1)) : 0.0; }
+
+}  // namespace
+
+// Welford's one-pass update: stable for long runs of similar values.
+void ErrorStats::Add(double x) {
+  if (!std::isfinite(x)) return;
+  ++count;
+  const double d = x - mean;
+  mean += d / static_cast<double>(count);
+  m2 += d * (x - mean);
+  max = count == 1 ? x : std::max(max, x);
+  sd = SampleSd(m2, count);
+}
+
+void ErrorStats::Merge(const ErrorStats& o) {
+  if (o.count == 0) return;
+  if (count == 0) {
+    *this = o;
+    return;
+  }
+  const double na = static_cast<double>(count), nb = static_cast<double>(o.count), n = na + nb;
+  const double d = o.mean - mean;
+  m2 += o.m2 + d * d * na * nb / n;
+  mean += d * nb / n;
+  max = std::max(max, o.max);
+  count += o.count;
+  sd = SampleSd(m2, count);
+}
 
 ErrorStats SummariseErrors(const Eigen::MatrixXd& error_mm, const std::vector<int>& columns, int64_t first,
                            int64_t count) {
@@ -24,21 +57,10 @@ ErrorStats SummariseErrors(const Eigen::MatrixXd& error_mm, const std::vector<in
                          std::to_string(error_mm.cols() - 1));
     }
   }
-  // Welford: one pass, stable.
   ErrorStats s;
-  double m2 = 0;
   for (int64_t r = first; r < last; ++r) {
-    for (int c : cols) {
-      const double e = error_mm(r, c);
-      if (!std::isfinite(e)) continue;
-      ++s.count;
-      const double d = e - s.mean;
-      s.mean += d / static_cast<double>(s.count);
-      m2 += d * (e - s.mean);
-      s.max = std::max(s.max, e);
-    }
+    for (int c : cols) s.Add(error_mm(r, c));
   }
-  s.sd = s.count > 1 ? std::sqrt(m2 / static_cast<double>(s.count - 1)) : 0.0;
   return s;
 }
 

@@ -48,11 +48,20 @@ struct InversionResult {
   int64_t frames() const { return static_cast<int64_t>(solved.size()); }
 };
 
+// Error statistics of absolute errors: count, mean, sample sd and max of the
+// finite samples added, mergeable (Chan et al.'s pairwise update), so per-take
+// statistics pool into per-role and overall ones exactly as if every sample
+// had been added to one accumulator. The one implementation used by the model
+// jobs (workbench/jobs) and SummariseErrors. Non-finite samples are ignored.
 struct ErrorStats {
   int64_t count = 0;  // finite samples
-  double mean = 0;    // mean absolute error (mm)
-  double sd = 0;      // sample sd (divisor count − 1; 0 when count < 2)
-  double max = 0;
+  double mean = 0;    // mean absolute error (mm, or the caller's unit)
+  double sd = 0;      // sample sd (divisor count − 1; 0 when count < 2), kept current by Add and Merge
+  double max = 0;     // largest sample (0 when count == 0)
+  double m2 = 0;      // sum of squared deviations from the mean (for merging)
+
+  void Add(double x);
+  void Merge(const ErrorStats& other);
 };
 
 // Statistics of the finite entries of error_mm restricted to the given columns

@@ -7,18 +7,24 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
+#include <vector>
 
 #include "core/sha256.h"
 #include "io/corpus/corpus.h"
+#include "io/models/model_file.h"
 #include "tests/cli/cli_util.h"
 #include "tests/testing/testing.h"
 
@@ -71,12 +77,12 @@ TEST(CliModels, VirtualCuerAcceptance) {
   }
   std::ofstream(dir / "config.json") << R"({"format": "csw-model-config", "version": 1, "markerset": "set.json",
                                           "hand": {"angle_components": 20}})";
-  const std::string train =
-      " --train sentence_001,sentence_002,sentence_003,sentence_004,sentence_005,sentence_006"
-      " --config " +
-      Q(dir / "config.json") + " -o " + Q(models);
+  // The first six sentences, by a pattern (--train is --takes' alias).
+  const std::string train = " --train 'sentence_00[1-6]' --config " + Q(dir / "config.json") + " -o " + Q(models);
   const json rigid = RunJson("fit rigid " + Q(corpus) + train, dir.path());
   ASSERT_EQ(rigid["rigid"].size(), 2u);
+  EXPECT_EQ(rigid["training_takes"],
+            json({"sentence_001", "sentence_002", "sentence_003", "sentence_004", "sentence_005", "sentence_006"}));
   const json face = RunJson("fit face " + Q(corpus) + train, dir.path());
   ASSERT_TRUE(face.contains("face"));
   EXPECT_EQ(face["face"]["parameters"].size(), 6u);  // the simulator's face has 6 articulatory parameters
@@ -98,26 +104,34 @@ TEST(CliModels, VirtualCuerAcceptance) {
 
   const json inv = RunJson("invert " + Q(corpus) + " --models " + Q(models) + " --truth " + Q(sim), dir.path());
   ASSERT_TRUE(inv.contains("face") && inv.contains("hand"));
+  // Limits stated here, about 20 % above the values measured when the hand's
+  // Gaussian gap filler landed (docs/models.md: face 0.320 / 0.322 mm visible,
+  // 0.127 mm occluded, pose 0.067° / 0.073 mm; hand 1.116 / 1.362 mm visible,
+  // 2.56 mm occluded, pose 0.179° / 0.122 mm), within issue 4's targets (visible
+  // face ≤ 1 mm, hand ≤ 2 mm, occluded ≤ 3 mm, pose ≤ 0.5° / 0.5 mm). The
+  // occluded face limit, 0.20 mm, is wider (+57 %): it pools only ~800 samples.
+  struct Limits {
+    double training, held_out, occluded, rotation_deg, translation_mm;
+  };
+  const std::map<std::string, Limits> limits = {{"face", {0.40, 0.40, 0.20, 0.08, 0.09}},
+                                                {"hand", {1.35, 1.65, 3.00, 0.22, 0.15}}};
   for (const char* kind : {"face", "hand"}) {
     SCOPED_TRACE(kind);
     const json& m = inv[kind];
-    const double target = m["target_mm"].get<double>();
+    const Limits& limit = limits.at(kind);
     EXPECT_EQ(m["takes"].size(), 18u);
     const double train_err = Mean(m["training"]["visible"]), held_err = Mean(m["held_out"]["visible"]);
-    EXPECT_LE(train_err, target);
-    EXPECT_LE(held_err, target);
+    EXPECT_LE(train_err, limit.training);
+    EXPECT_LE(held_err, limit.held_out);
     EXPECT_LE(held_err, 1.25 * train_err);
     EXPECT_GT(m["overall"]["occluded"]["count"].get<int64_t>(), 0);
-    EXPECT_LE(Mean(m["overall"]["occluded"]), 3.0);
-    // The gap-edge correction costs the face, already at the noise floor, at
-    // most a few hundredths of a mm; the hand's Gaussian fill is left as is.
-    EXPECT_LE(Mean(m["overall"]["occluded"]), Mean(m["overall"]["occluded_model"]) + 0.02);
+    EXPECT_LE(Mean(m["overall"]["occluded"]), limit.occluded);
     std::printf("%s: training %.3f mm, held-out %.3f mm, occluded %.3f mm (model alone %.3f), pose %.3f deg %.3f mm\n",
                 kind, train_err, held_err, Mean(m["overall"]["occluded"]), Mean(m["overall"]["occluded_model"]),
                 m["overall"]["pose"]["rotation_deg"]["mean_deg"].get<double>(),
                 Mean(m["overall"]["pose"]["translation_mm"]));
-    EXPECT_LE(m["overall"]["pose"]["rotation_deg"]["mean_deg"].get<double>(), 0.5);
-    EXPECT_LE(Mean(m["overall"]["pose"]["translation_mm"]), 0.5);
+    EXPECT_LE(m["overall"]["pose"]["rotation_deg"]["mean_deg"].get<double>(), limit.rotation_deg);
+    EXPECT_LE(Mean(m["overall"]["pose"]["translation_mm"]), limit.translation_mm);
     for (const auto& t : m["takes"]) EXPECT_EQ(t["solved_frames"], t["frames"]) << t["take"];
     // The per-marker breakdown pools the same samples: shape markers' counts
     // add up to the totals, and their count-weighted means to the overall mean.
@@ -134,6 +148,30 @@ TEST(CliModels, VirtualCuerAcceptance) {
     EXPECT_EQ(occluded_count, m["overall"]["occluded"]["count"].get<int64_t>());
     EXPECT_NEAR(occluded_sum / static_cast<double>(occluded_count), Mean(m["overall"]["occluded"]), 1e-6);
   }
+  // The gap-edge correction costs the face, already at the noise floor, at
+  // most a few hundredths of a mm.
+  EXPECT_LE(Mean(inv["face"]["overall"]["occluded"]), Mean(inv["face"]["overall"]["occluded_model"]) + 0.02);
+  // The hand's Gaussian gap filler beats the shape model on the occluded
+  // samples (2.56 vs 4.79 mm when it landed), compared on the held-out takes
+  // sentence_010 … 018 against an inversion without the filler.
+  const json shape_only = RunJson("invert " + Q(corpus) + " --models " + Q(models) + " --truth " + Q(sim) +
+                                      " --only hand --no-gaussian-fill --takes 'sentence_01?'",
+                                  dir.path());
+  ASSERT_EQ(shape_only["hand"]["takes"].size(), 9u);
+  double filled_sum = 0;
+  int64_t filled_count = 0;
+  for (const auto& t : inv["hand"]["takes"]) {
+    if (t["name"].get<std::string>().rfind("sentence_01", 0) != 0) continue;
+    const int64_t n = t["occluded"]["count"].get<int64_t>();
+    filled_count += n;
+    if (n > 0) filled_sum += static_cast<double>(n) * Mean(t["occluded"]);
+  }
+  ASSERT_GT(filled_count, 0);
+  const double gaussian = filled_sum / static_cast<double>(filled_count);
+  const double shape_model = Mean(shape_only["hand"]["overall"]["occluded"]);
+  std::printf("hand occluded on sentence_010-018: Gaussian filler %.3f mm, shape model alone %.3f mm\n", gaussian,
+              shape_model);
+  EXPECT_LE(gaussian, 0.75 * shape_model);
 
   // Ctrl-C during a filling inversion: exit 130, the corpus byte-identical.
   const std::string before = Sha256OfFile(corpus.string());
@@ -270,6 +308,227 @@ TEST(CliModels, ClearErrors) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("cfg.json"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("componets"), std::string::npos) << r.err;
+}
+
+// Simulated sentences (seed 7) copied under the given take names and imported
+// with the simulator's marker set into dir/corpus.h5. Returns the marker set.
+fs::path SentenceCorpus(const testing::TempDir& dir, const std::vector<std::string>& names, int sentences) {
+  const fs::path sim = dir / "sim", in = dir / "in";
+  EXPECT_EQ(Csw("simulate sentences --count " + std::to_string(sentences) + " --seed 7 -o " + Q(sim), dir.path()).code,
+            0);
+  fs::create_directories(in);
+  std::string files;
+  for (size_t i = 0; i < names.size(); ++i) {
+    const int k = 1 + static_cast<int>(i) % sentences;
+    const fs::path from = sim / ("sentence_00" + std::to_string(k) + ".c3d");
+    fs::copy_file(from, in / (names[i] + ".c3d"));
+    files += " " + Q(in / (names[i] + ".c3d"));
+  }
+  const RunResult r =
+      Csw("import" + files + " --markerset " + Q(sim / "markerset.json") + " -o " + Q(dir / "corpus.h5"), dir.path());
+  EXPECT_EQ(r.code, 0) << r.err;
+  return sim / "markerset.json";
+}
+
+std::vector<std::string> TakeNames(const json& model_report) {
+  std::vector<std::string> out;
+  for (const auto& t : model_report["takes"]) out.push_back(t["name"].get<std::string>());
+  return out;
+}
+
+// Issue 10: "subj@home" is a legal take name; it was split at '@' as a range,
+// with and without --takes.
+TEST(CliModels, TakeNamedSubjAtHomeIsFittedAndInverted) {
+  testing::TempDir dir;
+  const fs::path set = SentenceCorpus(dir, {"subj@home", "other"}, 2);
+  const std::string corpus = Q(dir / "corpus.h5");
+  // Every take by default: recorded escaped, in corpus (name) order.
+  const json all = RunJson("fit face " + corpus + " --markerset " + Q(set) + " -o " + Q(dir / "all.h5"), dir.path());
+  EXPECT_EQ(all["training_takes"], json({"other", "subj\\@home"}));
+  // Named as is, and escaped with a range (--train and --takes are the same option).
+  const json named = RunJson(
+      "fit face " + corpus + " --takes subj@home --markerset " + Q(set) + " -o " + Q(dir / "named.h5"), dir.path());
+  EXPECT_EQ(named["training_takes"], json({"subj\\@home"}));
+  const json half =
+      RunJson("fit face " + corpus + " --train 'subj\\@home@:50%' --markerset " + Q(set) + " -o " + Q(dir / "half.h5"),
+              dir.path());
+  EXPECT_EQ(half["training_takes"], json({"subj\\@home@:50%"}));
+
+  // Inverted by default: both takes, subj@home a training take of the half model.
+  const json inv = RunJson("invert " + corpus + " --models " + Q(dir / "half.h5"), dir.path());
+  ASSERT_EQ(TakeNames(inv["face"]), (std::vector<std::string>{"other", "subj@home"}));
+  const json& home = inv["face"]["takes"][1];
+  EXPECT_EQ(home["role"], "training");
+  EXPECT_EQ(inv["face"]["takes"][0]["role"], "held_out");
+  EXPECT_EQ(home["solved_frames"], home["frames"]);
+  EXPECT_LE(Mean(home["visible"]), 0.5);  // noise floor 0.32 mm (0.2 mm per axis)
+  const int64_t frames = home["frames"].get<int64_t>();
+  ASSERT_GT(frames, 100);
+  // The second half, named unescaped with a range: held out, frames [frames/2, frames).
+  const json second =
+      RunJson("invert " + corpus + " --models " + Q(dir / "half.h5") + " --takes 'subj@home@50%:'", dir.path());
+  ASSERT_EQ(second["face"]["takes"].size(), 1u);
+  EXPECT_EQ(second["face"]["takes"][0]["name"], "subj@home");
+  EXPECT_EQ(second["face"]["takes"][0]["role"], "held_out");
+  EXPECT_EQ(second["face"]["takes"][0]["first_frame"].get<int64_t>(), frames / 2);
+  EXPECT_EQ(second["face"]["takes"][0]["frames"].get<int64_t>(), frames - frames / 2);
+  // Filled: a new take subj@home.filled.
+  const json fill =
+      RunJson("invert " + corpus + " --models " + Q(dir / "named.h5") + " --takes subj@home --fill", dir.path());
+  ASSERT_EQ(fill["filled"].size(), 1u);
+  EXPECT_EQ(fill["filled"][0]["filled_take"], "subj@home.filled");
+  EXPECT_TRUE(Corpus::Open((dir / "corpus.h5").string()).HasTake("subj@home.filled"));
+  // A name that is no take, and a pattern matching none: one clear error each.
+  RunResult r = Csw("invert " + corpus + " --models " + Q(dir / "half.h5") + " --takes subj", dir.path());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("no take named 'subj'"), std::string::npos) << r.err;
+  r = Csw("invert " + corpus + " --models " + Q(dir / "half.h5") + " --takes 'subj?home*,zz*'", dir.path());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("no take matches the pattern 'zz*'"), std::string::npos) << r.err;
+}
+
+// Issue 10: every take whose name contained ".filled" was skipped; only the
+// fill versions csw invert --fill makes (<take>.filled[-k] of an existing take) are.
+TEST(CliModels, TakeWithFilledInItsNameIsNotSkipped) {
+  testing::TempDir dir;
+  const fs::path set = SentenceCorpus(dir, {"x.filled", "notes.filled-up", "t"}, 2);
+  const std::string corpus = Q(dir / "corpus.h5"), models = Q(dir / "m.h5");
+  const json fit = RunJson("fit face " + corpus + " --markerset " + Q(set) + " -o " + models, dir.path());
+  EXPECT_EQ(fit["training_takes"], json({"notes.filled-up", "t", "x.filled"}));
+  const json fill = RunJson("invert " + corpus + " --models " + models + " --fill", dir.path());
+  ASSERT_EQ(fill["filled"].size(), 3u);
+  EXPECT_EQ(fill["filled"][0]["filled_take"], "notes.filled-up.filled");
+  EXPECT_EQ(fill["filled"][1]["filled_take"], "t.filled");
+  EXPECT_EQ(fill["filled"][2]["filled_take"], "x.filled.filled");
+  // The three new takes are fill versions of existing takes: left out by default,
+  // and by patterns that do not ask for them; the originals are kept.
+  const json again = RunJson("invert " + corpus + " --models " + models, dir.path());
+  EXPECT_EQ(TakeNames(again["face"]), (std::vector<std::string>{"notes.filled-up", "t", "x.filled"}));
+  const json pattern = RunJson("invert " + corpus + " --models " + models + " --takes 'x*'", dir.path());
+  EXPECT_EQ(TakeNames(pattern["face"]), (std::vector<std::string>{"x.filled"}));
+  const json named = RunJson("invert " + corpus + " --models " + models + " --takes 't.filled'", dir.path());
+  EXPECT_EQ(TakeNames(named["face"]), (std::vector<std::string>{"t.filled"}));
+  for (const auto& t : again["face"]["takes"]) EXPECT_LE(Mean(t["visible"]), 0.5) << t["name"];
+}
+
+// Reads a PNG's width and height from its IHDR chunk.
+std::pair<int, int> PngSize(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  unsigned char h[24] = {};
+  in.read(reinterpret_cast<char*>(h), 24);
+  if (!in || h[1] != 'P' || h[2] != 'N' || h[3] != 'G') return {0, 0};
+  auto be = [&](int o) { return (h[o] << 24) | (h[o + 1] << 16) | (h[o + 2] << 8) | h[o + 3]; };
+  return {be(16), be(20)};
+}
+
+// Issue 10: `fit rigid --figures` silently drew nothing. It draws, per
+// cluster, the residual per training take and the motion variance explained.
+TEST(CliModels, FitRigidWritesFigures) {
+  testing::TempDir dir;
+  const fs::path set = SentenceCorpus(dir, {"a", "b"}, 2);
+  const std::string corpus = Q(dir / "corpus.h5");
+  const fs::path figs = dir / "figs";
+  const RunResult run = Csw(
+      "fit rigid " + corpus + " --markerset " + Q(set) + " --figures " + Q(figs) + " -o " + Q(dir / "m.h5") + " --json",
+      dir.path());
+  if (run.code != 0 && run.err.find("built without figures") != std::string::npos) {
+    GTEST_SKIP() << "csw was built without the figures module (CSW_BUILD_GUI=OFF)";
+  }
+  ASSERT_EQ(run.code, 0) << run.err;
+  const json fit = json::parse(run.out);
+  std::vector<std::string> expected;
+  for (const char* cluster : {"head", "forearm"})
+    for (const char* what : {"_residuals", "_motion_variance"})
+      for (const char* ext : {".png", ".svg"})
+        expected.push_back((figs / (cluster + std::string(what) + ext)).string());
+  EXPECT_EQ(fit["figures"], json(expected));
+  for (const std::string& f : expected) {
+    ASSERT_TRUE(fs::exists(f)) << f;
+    if (f.ends_with(".png")) {
+      EXPECT_EQ(PngSize(f), std::make_pair(1200, 700)) << f;  // report::kFigureWidth × kFigureHeight
+    } else {
+      std::ifstream in(f);
+      std::stringstream text;
+      text << in.rdbuf();
+      EXPECT_NE(text.str().find("<svg"), std::string::npos) << f;
+    }
+  }
+  // The residuals drawn: per cluster and take, near the simulated marker noise
+  // (0.2 mm per axis: a 3D noise vector of mean length 0.32 mm, less the
+  // six degrees of freedom the rigid fit absorbs).
+  ASSERT_EQ(fit["rigid"].size(), 2u);
+  for (const auto& m : fit["rigid"]) {
+    ASSERT_EQ(m["takes"].size(), 2u) << m["name"];
+    for (const auto& t : m["takes"]) {
+      EXPECT_GT(t["residual"]["count"].get<int64_t>(), 100) << m["name"];
+      EXPECT_GT(Mean(t["residual"]), 0.1) << m["name"];
+      EXPECT_LT(Mean(t["residual"]), 0.4) << m["name"];
+    }
+  }
+  // Without the figures module: a clear error before anything is fitted or written.
+  ::setenv("CSW_FIGURES_MODULE", "/nonexistent/libcsw_figures.so", 1);
+  const RunResult r = Csw(
+      "fit rigid " + corpus + " --markerset " + Q(set) + " --figures " + Q(dir / "figs2") + " -o " + Q(dir / "m2.h5"),
+      dir.path());
+  ::unsetenv("CSW_FIGURES_MODULE");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("cannot load the figures module"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("/nonexistent/libcsw_figures.so"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "m2.h5"));
+  EXPECT_FALSE(fs::exists(dir / "figs2"));
+}
+
+// Issue 10: Qt is loaded only for --figures (libcsw_figures.so, dlopen); the
+// csw binary itself links no Qt library, directly or through a dependency.
+TEST(CliModels, CswDoesNotLinkQt) {
+  testing::TempDir dir;
+  const std::string cmd = "ldd " + std::string(CSW_BINARY) + " > " + Q(dir / "ldd.txt");
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream in(dir / "ldd.txt");
+  std::string line;
+  int libraries = 0, qt = 0;
+  while (std::getline(in, line)) {
+    ++libraries;
+    std::transform(line.begin(), line.end(), line.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (line.find("libqt") != std::string::npos || line.find("qcustomplot") != std::string::npos) ++qt;
+  }
+  EXPECT_GT(libraries, 3);  // libc, libstdc++, libm at least: ldd did list the binary's libraries
+  EXPECT_EQ(qt, 0);
+}
+
+// Issue 10: two fits writing one model file at the same time. Either both
+// models end up in the file, or a writer that could not get the file fails
+// with a lock error and the other's model is in it; never a silent loss.
+TEST(CliModels, TwoConcurrentFitsToOneModelFileLoseNothing) {
+  testing::TempDir dir;
+  const fs::path set = SentenceCorpus(dir, {"a", "b", "c"}, 3);
+  const std::string corpus = Q(dir / "corpus.h5");
+  const fs::path models = dir / "m.h5";
+  auto fit = [&](const std::string& kind) {
+    return std::string(CSW_BINARY) + " -q fit " + kind + " " + corpus + " --markerset " + Q(set) + " -o " + Q(models) +
+           " >" + Q(dir / (kind + ".out")) + " 2>" + Q(dir / (kind + ".err")) + "; echo $? >" + Q(dir / (kind + ".rc"));
+  };
+  const std::string both = "(" + fit("face") + ") & (" + fit("hand") + ") & wait";
+  ASSERT_EQ(std::system(both.c_str()), 0);
+  auto slurp = [&](const std::string& name) {
+    std::ifstream in(dir / name);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+  };
+  const int face_rc = std::stoi(slurp("face.rc")), hand_rc = std::stoi(slurp("hand.rc"));
+  ASSERT_TRUE(face_rc == 0 || hand_rc == 0) << slurp("face.err") << slurp("hand.err");
+  const ModelFile file = LoadModelFile(models.string());
+  for (const auto& [kind, rc, present] :
+       {std::tuple{"face", face_rc, file.face.has_value()}, std::tuple{"hand", hand_rc, file.hand.has_value()}}) {
+    SCOPED_TRACE(kind);
+    if (rc == 0) {
+      EXPECT_TRUE(present) << "the fit succeeded but its model is not in the file";
+    } else {
+      EXPECT_FALSE(present);
+      EXPECT_NE(slurp(std::string(kind) + ".err").find("lock"), std::string::npos) << slurp(std::string(kind) + ".err");
+    }
+  }
 }
 
 }  // namespace

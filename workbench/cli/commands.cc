@@ -187,10 +187,11 @@ class FitCommand : public Command {
         ->required()
         ->check(CLI::IsMember({"rigid", "face", "hand"}));
     sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
-    sub_->add_option("--train", options_.train,
-                     "Training takes: name, or name@first:end in frames or percentages (name@:50%); "
-                     "default every take")
-        ->delimiter(',');
+    // Commas are split by the job (jobs::SelectTakes), which honours backslash escapes.
+    sub_->add_option("--takes,--train", options_.takes,
+                     "Training takes, comma-separated: name, name@first:end (frames or percentages, name@:50%), "
+                     "or a glob pattern ('sentence_0[1-5]*'); \\ escapes * ? [ ] @ , (docs/cli.md); "
+                     "default every take but fill versions");
     sub_->add_option("--markerset", options_.markerset, "Marker-set JSON naming the clusters, face and hand markers");
     sub_->add_option("--config", options_.config, "Model configuration JSON (docs/model-format.md)");
     sub_->add_option("--figures", options_.figures, "Folder for PNG and SVG figures");
@@ -222,7 +223,9 @@ class InvertCommand : public Command {
                               "its gaps filled as a new take <take>.filled");
     sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
     sub_->add_option("--models", options_.models, "Model file from csw fit")->required();
-    sub_->add_option("--takes", options_.takes, "Takes (name or name@first:end); default every take")->delimiter(',');
+    sub_->add_option("--takes", options_.takes,
+                     "Takes, comma-separated: name, name@first:end (frames or percentages, name@50%:), or a glob "
+                     "pattern ('h00*'); \\ escapes * ? [ ] @ , (docs/cli.md); default every take but fill versions");
     sub_->add_option("--only", options_.only, "Invert only the face or the hand model")
         ->check(CLI::IsMember({"face", "hand"}));
     sub_->add_flag("--fill", options_.fill, "Write the filled takes into the corpus as new takes");

@@ -1,0 +1,30 @@
+#pragma once
+// Figures for the jobs, drawn by the figures module (libcsw_figures.so,
+// workbench/report/figures_api.h) loaded with dlopen on first use, so that
+// programs linking csw_jobs (the csw CLI) do not load Qt unless asked for
+// figures. The module is looked for in $CSW_FIGURES_MODULE (a file; when set,
+// the only place looked at), else in order: next to the running program, in
+// <program dir>/../lib/csw/, and where the build wrote it (a path compiled
+// in). Each Save* throws InvalidInput naming the paths tried when the module
+// cannot be loaded, and InvalidInput with the module's message (naming the
+// file) when drawing fails.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "workbench/report/report.h"
+
+namespace csw::jobs::figures {
+
+// Loads the module (once); throws InvalidInput when it cannot.
+void Require();
+
+void SaveErrorBars(const std::string& path, const std::string& title, const std::vector<report::ErrorBar>& bars,
+                   double target_mm);
+void SaveVarianceExplained(const std::string& path, const std::string& title, const std::vector<std::string>& names,
+                           const std::vector<double>& fractions);
+void SaveParameterEffects(const std::string& path, const std::string& title, const Eigen::Matrix3Xd& neutral,
+                          const std::vector<report::ParameterEffect>& effects,
+                          const std::vector<std::pair<int, int>>& sticks);
+
+}  // namespace csw::jobs::figures

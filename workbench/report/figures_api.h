@@ -1,0 +1,34 @@
+#pragma once
+// The entry points of the figures module (libcsw_figures.so): csw_report's
+// Save* functions behind a table of plain function pointers, so that programs
+// that draw figures only on request (`csw fit/invert --figures`) load Qt at
+// run time with dlopen instead of linking it (workbench/jobs/figures.h).
+// Each function returns "" on success, else the error message (exceptions do
+// not cross the module boundary). Plain types only: no Qt in this header.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "workbench/report/report.h"
+
+namespace csw::report {
+
+inline constexpr int kFiguresApiVersion = 1;
+
+struct FiguresApi {
+  int version = kFiguresApiVersion;
+  std::string (*save_error_bars)(const std::string& path, const std::string& title, const std::vector<ErrorBar>& bars,
+                                 double target_mm) = nullptr;
+  std::string (*save_variance_explained)(const std::string& path, const std::string& title,
+                                         const std::vector<std::string>& names,
+                                         const std::vector<double>& fractions) = nullptr;
+  std::string (*save_parameter_effects)(const std::string& path, const std::string& title,
+                                        const Eigen::Matrix3Xd& neutral, const std::vector<ParameterEffect>& effects,
+                                        const std::vector<std::pair<int, int>>& sticks) = nullptr;
+};
+
+}  // namespace csw::report
+
+// The module's one exported symbol.
+#define CSW_FIGURES_ENTRY_POINT "csw_figures_api"
+extern "C" const csw::report::FiguresApi* csw_figures_api();

@@ -1,0 +1,44 @@
+// libcsw_figures.so: csw_report's figures for programs that load them with
+// dlopen (workbench/jobs/figures.cc). Exceptions become error messages.
+#include <exception>
+
+#include "workbench/report/figures_api.h"
+#include "workbench/report/report.h"
+
+namespace {
+
+template <typename F>
+std::string Guarded(F&& f) {
+  try {
+    f();
+    return "";
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "unknown error while drawing a figure";
+  }
+}
+
+std::string SaveErrorBars(const std::string& path, const std::string& title,
+                          const std::vector<csw::report::ErrorBar>& bars, double target_mm) {
+  return Guarded([&] { csw::report::SaveErrorBars(path, title, bars, target_mm); });
+}
+
+std::string SaveVarianceExplained(const std::string& path, const std::string& title,
+                                  const std::vector<std::string>& names, const std::vector<double>& fractions) {
+  return Guarded([&] { csw::report::SaveVarianceExplained(path, title, names, fractions); });
+}
+
+std::string SaveParameterEffects(const std::string& path, const std::string& title, const Eigen::Matrix3Xd& neutral,
+                                 const std::vector<csw::report::ParameterEffect>& effects,
+                                 const std::vector<std::pair<int, int>>& sticks) {
+  return Guarded([&] { csw::report::SaveParameterEffects(path, title, neutral, effects, sticks); });
+}
+
+}  // namespace
+
+extern "C" __attribute__((visibility("default"))) const csw::report::FiguresApi* csw_figures_api() {
+  static const csw::report::FiguresApi api{csw::report::kFiguresApiVersion, &SaveErrorBars, &SaveVarianceExplained,
+                                           &SaveParameterEffects};
+  return &api;
+}
