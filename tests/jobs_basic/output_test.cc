@@ -1,6 +1,7 @@
 // Text and JSON output of inspect and info on inputs whose facts the test knows:
 // a corpus and a model file built here, JSON written here.
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
 #include <cmath>
 #include <filesystem>
@@ -234,6 +235,41 @@ TEST(InspectJob, NonHdf5H5FileIsAClearError) {
   } catch (const InvalidInput& e) {
     EXPECT_EQ(std::string(e.what()), path + ": not an HDF5 file (expected a csw corpus or model file)");
   }
+}
+
+TEST(InspectJob, Hdf5FileOfAnotherFormatIsAClearError) {
+  testing::TempDir dir;
+  const std::string plain = (dir / "plain.h5").string(), other = (dir / "other.h5").string();
+  for (const std::string& path : {plain, other}) {
+    hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    if (path == other) {
+      hid_t type = H5Tcopy(H5T_C_S1);
+      H5Tset_size(type, 9);
+      hid_t space = H5Screate(H5S_SCALAR);
+      hid_t attr = H5Acreate2(f, "format", type, space, H5P_DEFAULT, H5P_DEFAULT);
+      ASSERT_GE(H5Awrite(attr, type, "my-stuff"), 0);
+      H5Aclose(attr);
+      H5Sclose(space);
+      H5Tclose(type);
+    }
+    H5Fclose(f);
+  }
+  Progress progress;
+  auto message = [&](const std::string& path) {
+    try {
+      Inspect(path, progress);
+    } catch (const InvalidInput& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message(plain), plain +
+                                ": an HDF5 file that is neither a csw corpus nor a csw model file (no root attribute "
+                                "'format'; expected 'csw-corpus' or 'csw-models')");
+  EXPECT_EQ(message(other), other +
+                                ": an HDF5 file that is neither a csw corpus nor a csw model file (root attribute "
+                                "format is 'my-stuff'; expected 'csw-corpus' or 'csw-models')");
 }
 
 }  // namespace
