@@ -409,8 +409,9 @@ bool AnyFileUnder(const fs::path& dir, const std::string& suffix) {
   return false;
 }
 
-// Ctrl-C during simulate printed "nothing was changed" while the takes written so far stayed on disk.
-TEST(Cli, CtrlCDuringSimulateLeavesNothingBehind) {
+// Starts `csw simulate sentences` (40 takes), sends `sig` once a take has been
+// written, and checks the exit code and that nothing is left behind.
+void SignalDuringSimulateLeavesNothingBehind(int sig, int expected_code, const std::string& expected_message) {
   testing::TempDir dir;
   fs::path out = dir / "sim";
   fs::path err = dir / "err.txt";
@@ -425,26 +426,35 @@ TEST(Cli, CtrlCDuringSimulateLeavesNothingBehind) {
           static_cast<char*>(nullptr));
     _exit(127);
   }
-  // Wait until at least one take has been written (somewhere under dir), then Ctrl-C.
+  // Wait until at least one take has been written (somewhere under dir), then signal.
   bool seen = false;
   for (int i = 0; i < 6000 && !seen; ++i) {
     seen = AnyFileUnder(dir.path(), ".c3d");
     if (!seen) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
-  kill(pid, SIGINT);
+  kill(pid, sig);
   int status = 0;
   waitpid(pid, &status, 0);
   ASSERT_TRUE(seen) << "simulate never wrote a take";
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 130);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by the signal instead of exiting";
+  EXPECT_EQ(WEXITSTATUS(status), expected_code);
   std::ifstream in(err);
   std::string message((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_NE(message.find("cancelled; nothing was changed"), std::string::npos) << message;
+  EXPECT_NE(message.find(expected_message), std::string::npos) << message;
   // And it is true: no output folder, no partial folder, no take anywhere.
   EXPECT_FALSE(fs::exists(out));
   EXPECT_FALSE(AnyFileUnder(dir.path(), ".c3d"));
   for (const auto& e : fs::directory_iterator(dir.path()))
     EXPECT_EQ(e.path().filename().string().find("csw-partial"), std::string::npos) << e.path();
+}
+
+// Ctrl-C during simulate printed "nothing was changed" while the takes written so far stayed on disk.
+TEST(Cli, CtrlCDuringSimulateLeavesNothingBehind) {
+  SignalDuringSimulateLeavesNothingBehind(SIGINT, 130, "csw: cancelled; nothing was changed");
+}
+
+TEST(Cli, SigtermDuringSimulateExits143AndLeavesNothingBehind) {
+  SignalDuringSimulateLeavesNothingBehind(SIGTERM, 143, "csw: terminated; nothing was changed");
 }
 
 // SIGTERM used to end csw with the signal's default action; now it cancels like Ctrl-C and exits 143.

@@ -54,7 +54,7 @@ void PrintJson(const nlohmann::json& j) { std::cout << j.dump(2) << "\n"; }
 class InspectCommand : public Command {
  public:
   void Register(CLI::App& app) override {
-    sub_ = app.add_subcommand("inspect", "Print header facts of a C3D, TRC, TextGrid, EAF, WAV or corpus file");
+    sub_ = app.add_subcommand("inspect", "Print header facts of a C3D, TRC, TextGrid, EAF, WAV, corpus or model file");
     sub_->add_option("file", file_, "File to inspect")->required();
     sub_->add_flag("--json", json_, "Machine-readable JSON output");
   }
