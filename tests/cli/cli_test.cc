@@ -502,6 +502,42 @@ TEST(Cli, InspectModelsH5DescribesTheModelFile) {
   EXPECT_EQ(json::parse(c.out)["take_count"].get<int>(), 1);
 }
 
+// The same for a model file written by `csw fit`: described, not taken for a corpus.
+TEST(Cli, InspectModelsH5FromCswFitListsItsModels) {
+  testing::TempDir dir;
+  ASSERT_EQ(Csw("-q simulate shapes -o " + Q(dir / "s"), dir.path()).code, 0);
+  ASSERT_EQ(Csw("-q import " + Q(dir / "s" / "shapes_01.c3d") + " -o " + Q(dir / "c.h5"), dir.path()).code, 0);
+  RunResult fit = Csw("-q fit rigid " + Q(dir / "c.h5") + " --markerset " + Q(dir / "s" / "markerset.json") + " -o " +
+                          Q(dir / "models.h5"),
+                      dir.path());
+  ASSERT_EQ(fit.code, 0) << fit.err;
+  // Known from the inputs: the cluster sizes of the marker set, the frames of the take.
+  std::ifstream ms(dir / "s" / "markerset.json");
+  const json set = json::parse(ms);
+  const int64_t frames = Corpus::Open((dir / "c.h5").string()).Summary("shapes_01").frames;
+  RunResult r = Csw("inspect --json " + Q(dir / "models.h5"), dir.path());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["format"], "models");
+  EXPECT_EQ(j["model_count"].get<int>(), 2);
+  const std::pair<const char*, const char*> models[] = {{"head_motion", "head_cluster"},
+                                                        {"forearm_motion", "forearm_cluster"}};
+  for (const auto& [model, cluster] : models) {
+    SCOPED_TRACE(model);
+    ASSERT_TRUE(j["models"].contains(model)) << j.dump();
+    const json& m = j["models"][model];
+    EXPECT_EQ(m["markers"].get<size_t>(), set[cluster].size());
+    EXPECT_EQ(m["training_takes"], json::array({"shapes_01"}));
+    EXPECT_EQ(m["training_frames"].get<int64_t>(), frames);
+    EXPECT_EQ(m["created_utc"].get<std::string>().size(), 20u);  // 2026-01-02T03:04:05Z
+  }
+  RunResult text = Csw("inspect " + Q(dir / "models.h5"), dir.path());
+  ASSERT_EQ(text.code, 0) << text.err;
+  EXPECT_NE(text.out.find("  head_motion: " + std::to_string(set["head_cluster"].size()) + " markers, "),
+            std::string::npos)
+      << text.out;
+}
+
 // C3D samples with NaN coordinates and a residual >= 0 (Vicon/pyCGM2): inspect
 // counted them as valid (and gave sum_xyz_valid null) while import dropped them.
 TEST(Cli, C3dNanWithResidualIsMissingInInspectAndImport) {
