@@ -380,6 +380,14 @@ TEST(Cli, SimulateDemoHonoursRateAndNoOcclusions) {
   fs::path clean = dir / "clean";
   ASSERT_EQ(Csw("-q simulate demo --count 1 --clean -o " + Q(clean), dir.path()).code, 0);
   EXPECT_TRUE(fs::exists(clean / "sentences" / "sentence_001.clean.c3d"));
+  // --text replaces the 20 shipped sentences of demo: two texts give two sentence takes.
+  fs::path text = dir / "text";
+  RunResult t = Csw("-q simulate demo --text bonjour --text merci -o " + Q(text), dir.path());
+  ASSERT_EQ(t.code, 0) << t.err;
+  int sentences = 0;
+  for (const auto& e : fs::directory_iterator(text / "sentences"))
+    if (e.path().extension() == ".c3d") ++sentences;
+  EXPECT_EQ(sentences, 2);
 }
 
 // Starts csw with `args` in its own process; returns the pid.
