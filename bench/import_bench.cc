@@ -62,6 +62,33 @@ void BM_ImportC3dIntoCorpus(benchmark::State& state) {
 }
 BENCHMARK(BM_ImportC3dIntoCorpus)->Arg(60000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The whole `csw import` command as a separate process on the same file as
+// BM_ImportC3dIntoCorpus: process start-up (dynamic loading), option parsing,
+// SHA-256 of the source, C3D parse, corpus write, fsync and exit. Compare its
+// MB/s with BM_ImportC3dIntoCorpus (docs/performance.md: goal within 15 %).
+void BM_CswImportProcess(benchmark::State& state) {
+  const int64_t frames = state.range(0);
+  std::string c3d = MakeC3d(frames);
+  fs::path corpus = fs::temp_directory_path() / ("csw-bench-process-" + std::to_string(frames) + ".h5");
+  for (auto _ : state) {
+    state.PauseTiming();
+    fs::remove(corpus);
+    state.ResumeTiming();
+    pid_t pid = fork();
+    if (pid == 0) {
+      execl(CSW_BINARY, CSW_BINARY, "-q", "import", c3d.c_str(), "-o", corpus.c_str(), static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) state.SkipWithError("csw import failed");
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<int64_t>(fs::file_size(c3d)));
+  state.counters["file_MB"] = static_cast<double>(fs::file_size(c3d)) / 1e6;
+  fs::remove(corpus);
+}
+BENCHMARK(BM_CswImportProcess)->Arg(60000)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 // Peak resident memory of a separate `csw import` process: must stay flat as takes grow.
 void BM_CswImportPeakRss(benchmark::State& state) {
   const int64_t frames = state.range(0);

@@ -329,7 +329,11 @@ std::vector<std::string> SimulateCorpus(const SimulateOptions& options, const st
 void GenerateDemoCorpus(const std::string& out_dir, uint64_t seed, int sentences, Progress& progress) {
   SimulateOptions o;
   o.seed = seed;
-  o.write_clean = false;
+  GenerateDemoCorpus(out_dir, o, sentences, progress);
+}
+
+void GenerateDemoCorpus(const std::string& out_dir, const SimulateOptions& base, int sentences, Progress& progress) {
+  SimulateOptions o = base;
   o.write_truth = false;  // ground truth is for tests, which simulate their own takes
   o.int16_c3d = true;     // keeps shapes + visemes + 20 sentences under 20 MB
   for (CorpusKind kind : {CorpusKind::kShapes, CorpusKind::kVisemes, CorpusKind::kSentences}) {

@@ -198,5 +198,9 @@ std::vector<std::string> SimulateCorpus(const SimulateOptions& options, const st
 // in out_dir/{shapes,visemes,sentences}, without clean copies (small: ≤ 20 MB).
 void GenerateDemoCorpus(const std::string& out_dir, uint64_t seed, int sentences,
                         Progress& progress);  // 7 sentences: 20.6 MB
+// The same with the capture options of `base` (rate, noise, occlusions,
+// dropouts, label swaps, clean copies, sentences to cue); its kind, count,
+// write_truth and int16_c3d are set per sub-corpus as above.
+void GenerateDemoCorpus(const std::string& out_dir, const SimulateOptions& base, int sentences, Progress& progress);
 
 }  // namespace csw

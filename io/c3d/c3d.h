@@ -3,6 +3,7 @@
 // DEC and MIPS processors with int16 or float storage, and a writer (Intel, float,
 // millimetres). Damaged files are read as far as they can be, with warnings;
 // anything unreadable throws csw::ParseError naming the file and the byte offset.
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -11,6 +12,16 @@
 #include "core/take.h"
 
 namespace csw {
+
+// The one rule for a valid point sample, used by every path that reads point
+// data (C3dReader::ReadFrames for import/ReadC3d and C3dReader::ValidPointStats
+// for inspect): the residual word (int16) or fourth float is >= 0 AND none of
+// the coordinates is NaN. Some pipelines (Vicon, pyCGM2) mark missing samples
+// with NaN coordinates and a residual >= 0; those are missing. Coordinates are
+// as stored in the file (before any scaling).
+inline bool C3dPointSampleValid(float x, float y, float z, float residual_word) {
+  return residual_word >= 0.0f && !std::isnan(x + y + z);
+}
 
 struct C3dInfo {
   std::string processor;    // "intel", "dec", "mips"

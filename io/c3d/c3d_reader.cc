@@ -204,7 +204,7 @@ void Convert(const ConvertArgs& a) {
         y = c3d::LoadF32<kP>(s + 4);
         z = c3d::LoadF32<kP>(s + 8);
         float w = c3d::LoadF32<kP>(s + 12);
-        valid = w >= 0.0f;
+        valid = C3dPointSampleValid(x, y, z, w);
         int word = valid && w < 65536.0f ? static_cast<int>(w) : 0;
         r = static_cast<float>(word & 0xFF) * a.residual_scale;
         x *= a.mm;
@@ -216,10 +216,10 @@ void Convert(const ConvertArgs& a) {
         y = static_cast<float>(c3d::LoadI16<kP>(s + 2)) * k;
         z = static_cast<float>(c3d::LoadI16<kP>(s + 4)) * k;
         int16_t w = c3d::LoadI16<kP>(s + 6);
-        valid = w >= 0;
+        valid = C3dPointSampleValid(x, y, z, static_cast<float>(w));
         r = static_cast<float>(w & 0xFF) * a.residual_scale;
       }
-      if (!valid || std::isnan(x + y + z)) {
+      if (!valid) {
         x = y = z = nan;
         r = -1.0f;
       }
@@ -256,12 +256,13 @@ void Stats(const unsigned char* src, int64_t count, int64_t points, int64_t fram
     const unsigned char* s = src + f * frame_bytes;
     for (int64_t i = 0; i < points; ++i, s += 4 * kWord) {
       if constexpr (kFloat) {
-        if (!(c3d::LoadF32<kP>(s + 12) >= 0.0f)) continue;
-        total += static_cast<double>(c3d::LoadF32<kP>(s)) + static_cast<double>(c3d::LoadF32<kP>(s + 4)) +
-                 static_cast<double>(c3d::LoadF32<kP>(s + 8));
+        const float x = c3d::LoadF32<kP>(s), y = c3d::LoadF32<kP>(s + 4), z = c3d::LoadF32<kP>(s + 8);
+        if (!C3dPointSampleValid(x, y, z, c3d::LoadF32<kP>(s + 12))) continue;
+        total += static_cast<double>(x) + static_cast<double>(y) + static_cast<double>(z);
       } else {
-        if (c3d::LoadI16<kP>(s + 6) < 0) continue;
-        total += (static_cast<double>(c3d::LoadI16<kP>(s)) + c3d::LoadI16<kP>(s + 2) + c3d::LoadI16<kP>(s + 4)) * scale;
+        const int16_t x = c3d::LoadI16<kP>(s), y = c3d::LoadI16<kP>(s + 2), z = c3d::LoadI16<kP>(s + 4);
+        if (!C3dPointSampleValid(x, y, z, static_cast<float>(c3d::LoadI16<kP>(s + 6)))) continue;
+        total += (static_cast<double>(x) + y + z) * scale;
       }
       ++n;
     }

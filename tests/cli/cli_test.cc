@@ -1,11 +1,13 @@
 // End-to-end tests of the `csw` command line: exit codes, inspect against the
 // reference values of ../shared/data/c3d/REFERENCE.tsv, import/info/export round
 // trips, atomic imports and a real kill in the middle of an import.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -316,6 +318,284 @@ TEST(Cli, KilledImportLeavesThePreviousCorpusIntact) {
   // The next import still works (a stale temporary file does not block it).
   EXPECT_EQ(Csw("import " + Q(dir / "big.c3d") + " -o " + Q(corpus), dir.path()).code, 0);
   EXPECT_EQ(Corpus::Open(corpus.string()).Takes().size(), 2u);
+}
+
+// Usage errors exit 1 (was 2 for a --markerset file that does not exist), bad data 2.
+TEST(Cli, ExitCodeUsageErrorIsOneBadDataIsTwo) {
+  testing::TempDir dir;
+  WriteC3d((dir / "a.c3d").string(), SmallTake("a", 20, 3));
+  RunResult r =
+      Csw("import " + Q(dir / "a.c3d") + " -o " + Q(dir / "c.h5") + " --markerset " + Q(dir / "no.json"), dir.path());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("--markerset"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "c.h5"));
+  RunResult text = Csw("simulate shapes --text bonjour -o " + Q(dir / "s"), dir.path());
+  EXPECT_EQ(text.code, 1) << text.err;
+  EXPECT_NE(text.err.find("--text"), std::string::npos) << text.err;
+  std::ofstream(dir / "bad.c3d") << std::string(700, 'x');
+  EXPECT_EQ(Csw("import " + Q(dir / "bad.c3d") + " -o " + Q(dir / "c.h5"), dir.path()).code, 2);
+}
+
+// Point rate and count of valid samples of a C3D written by csw simulate.
+struct C3dFacts {
+  double rate_hz = 0;
+  int64_t samples = 0, valid = 0;
+};
+C3dFacts FactsOf(const fs::path& c3d) {
+  C3dReader reader(c3d.string());
+  C3dFacts f;
+  f.rate_hz = reader.info().point_rate_hz;
+  f.samples = reader.info().points * reader.info().frames;
+  double sum = 0;
+  reader.ValidPointStats(&f.valid, &sum);
+  return f;
+}
+
+// `csw simulate demo` ignored --rate, --noise, --no-occlusions, ... (demo always 120 Hz with gaps).
+TEST(Cli, SimulateDemoHonoursRateAndNoOcclusions) {
+  testing::TempDir dir;
+  fs::path out = dir / "demo";
+  RunResult r = Csw("-q simulate demo --count 1 --rate 100 --no-occlusions --dropouts 0 -o " + Q(out), dir.path());
+  ASSERT_EQ(r.code, 0) << r.err;
+  int takes = 0;
+  for (const char* sub : {"shapes", "visemes", "sentences"}) {
+    for (const auto& e : fs::directory_iterator(out / sub)) {
+      if (e.path().extension() != ".c3d") continue;
+      SCOPED_TRACE(e.path().string());
+      C3dFacts f = FactsOf(e.path());
+      EXPECT_EQ(f.rate_hz, 100.0);
+      EXPECT_GT(f.samples, 0);
+      EXPECT_EQ(f.valid, f.samples) << "a gap without occlusions or dropouts";
+      ++takes;
+    }
+  }
+  EXPECT_EQ(takes, 6);  // 1 shapes take, 4 viseme items, 1 sentence
+  // The defaults (120 Hz, occlusions) still give gaps: the options above made the difference.
+  fs::path def = dir / "default";
+  ASSERT_EQ(Csw("-q simulate demo --count 1 -o " + Q(def), dir.path()).code, 0);
+  C3dFacts f = FactsOf(def / "sentences" / "sentence_001.c3d");
+  EXPECT_EQ(f.rate_hz, 120.0);
+  EXPECT_LT(f.valid, f.samples);
+  // --clean applies to demo too.
+  fs::path clean = dir / "clean";
+  ASSERT_EQ(Csw("-q simulate demo --count 1 --clean -o " + Q(clean), dir.path()).code, 0);
+  EXPECT_TRUE(fs::exists(clean / "sentences" / "sentence_001.clean.c3d"));
+  // --text replaces the 20 shipped sentences of demo: two texts give two sentence takes.
+  fs::path text = dir / "text";
+  RunResult t = Csw("-q simulate demo --text bonjour --text merci -o " + Q(text), dir.path());
+  ASSERT_EQ(t.code, 0) << t.err;
+  int sentences = 0;
+  for (const auto& e : fs::directory_iterator(text / "sentences"))
+    if (e.path().extension() == ".c3d") ++sentences;
+  EXPECT_EQ(sentences, 2);
+}
+
+// Starts csw with `args` in its own process; returns the pid.
+pid_t Spawn(const std::vector<std::string>& args) {
+  pid_t pid = fork();
+  if (pid == 0) {
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(CSW_BINARY));
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    int devnull = open("/dev/null", O_WRONLY);
+    dup2(devnull, STDOUT_FILENO);
+    execv(CSW_BINARY, argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+// True once a file ending in `suffix` exists anywhere under `dir`.
+bool AnyFileUnder(const fs::path& dir, const std::string& suffix) {
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
+       it.increment(ec)) {
+    const std::string n = it->path().filename().string();
+    if (n.size() >= suffix.size() && n.compare(n.size() - suffix.size(), suffix.size(), suffix) == 0) return true;
+  }
+  return false;
+}
+
+// Starts `csw simulate sentences` (40 takes), sends `sig` once a take has been
+// written, and checks the exit code and that nothing is left behind.
+void SignalDuringSimulateLeavesNothingBehind(int sig, int expected_code, const std::string& expected_message) {
+  testing::TempDir dir;
+  fs::path out = dir / "sim";
+  fs::path err = dir / "err.txt";
+  pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    int fd = open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(fd, STDERR_FILENO);
+    int devnull = open("/dev/null", O_WRONLY);
+    dup2(devnull, STDOUT_FILENO);
+    execl(CSW_BINARY, CSW_BINARY, "-q", "simulate", "sentences", "--count", "40", "-o", out.c_str(),
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait until at least one take has been written (somewhere under dir), then signal.
+  bool seen = false;
+  for (int i = 0; i < 6000 && !seen; ++i) {
+    seen = AnyFileUnder(dir.path(), ".c3d");
+    if (!seen) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  kill(pid, sig);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(seen) << "simulate never wrote a take";
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by the signal instead of exiting";
+  EXPECT_EQ(WEXITSTATUS(status), expected_code);
+  std::ifstream in(err);
+  std::string message((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(message.find(expected_message), std::string::npos) << message;
+  // And it is true: no output folder, no partial folder, no take anywhere.
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(AnyFileUnder(dir.path(), ".c3d"));
+  for (const auto& e : fs::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find("csw-partial"), std::string::npos) << e.path();
+}
+
+// Ctrl-C during simulate printed "nothing was changed" while the takes written so far stayed on disk.
+TEST(Cli, CtrlCDuringSimulateLeavesNothingBehind) {
+  SignalDuringSimulateLeavesNothingBehind(SIGINT, 130, "csw: cancelled; nothing was changed");
+}
+
+TEST(Cli, SigtermDuringSimulateExits143AndLeavesNothingBehind) {
+  SignalDuringSimulateLeavesNothingBehind(SIGTERM, 143, "csw: terminated; nothing was changed");
+}
+
+// SIGTERM used to end csw with the signal's default action; now it cancels like Ctrl-C and exits 143.
+TEST(Cli, SigtermDuringImportExits143AndKeepsTheCorpus) {
+  testing::TempDir dir;
+  WriteC3d((dir / "small.c3d").string(), SmallTake("small", 30, 3));
+  fs::path corpus = dir / "corpus.h5";
+  ASSERT_EQ(Csw("import " + Q(dir / "small.c3d") + " -o " + Q(corpus), dir.path()).code, 0);
+  const std::string before = Sha256OfFile(corpus.string());
+  WriteC3d((dir / "big.c3d").string(), SmallTake("big", 40000, 60));
+  pid_t pid = Spawn({"-q", "import", (dir / "big.c3d").string(), "-o", corpus.string()});
+  ASSERT_GE(pid, 0);
+  bool seen = false;
+  for (int i = 0; i < 2000 && !seen; ++i) {
+    for (const auto& e : fs::directory_iterator(dir.path())) {
+      std::string n = e.path().filename().string();
+      std::error_code ec;
+      if (n != "corpus.h5" && n.find("corpus.h5.csw-tmp") != std::string::npos && fs::file_size(e.path(), ec) > 200000)
+        seen = true;
+    }
+    if (!seen) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  kill(pid, SIGTERM);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(seen) << "the import finished or never started writing before SIGTERM";
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal instead of exiting";
+  EXPECT_EQ(WEXITSTATUS(status), 143);
+  EXPECT_EQ(Sha256OfFile(corpus.string()), before);
+}
+
+// `csw inspect models.h5` failed: every .h5 was opened as a corpus.
+TEST(Cli, InspectModelsH5DescribesTheModelFile) {
+  testing::TempDir dir;
+  std::ofstream(dir / "fake.h5") << "not hdf5";
+  RunResult fake = Csw("inspect " + Q(dir / "fake.h5"), dir.path());
+  EXPECT_EQ(fake.code, 2);
+  EXPECT_NE(fake.err.find("fake.h5: not an HDF5 file"), std::string::npos) << fake.err;
+  // A corpus is still a corpus.
+  WriteC3d((dir / "a.c3d").string(), SmallTake("a", 20, 3));
+  ASSERT_EQ(Csw("import " + Q(dir / "a.c3d") + " -o " + Q(dir / "c.h5"), dir.path()).code, 0);
+  RunResult c = Csw("inspect --json " + Q(dir / "c.h5"), dir.path());
+  ASSERT_EQ(c.code, 0) << c.err;
+  EXPECT_EQ(json::parse(c.out)["format"], "corpus");
+  EXPECT_EQ(json::parse(c.out)["take_count"].get<int>(), 1);
+}
+
+// The same for a model file written by `csw fit`: described, not taken for a corpus.
+TEST(Cli, InspectModelsH5FromCswFitListsItsModels) {
+  testing::TempDir dir;
+  ASSERT_EQ(Csw("-q simulate shapes -o " + Q(dir / "s"), dir.path()).code, 0);
+  ASSERT_EQ(Csw("-q import " + Q(dir / "s" / "shapes_01.c3d") + " -o " + Q(dir / "c.h5"), dir.path()).code, 0);
+  RunResult fit = Csw("-q fit rigid " + Q(dir / "c.h5") + " --markerset " + Q(dir / "s" / "markerset.json") + " -o " +
+                          Q(dir / "models.h5"),
+                      dir.path());
+  ASSERT_EQ(fit.code, 0) << fit.err;
+  // Known from the inputs: the cluster sizes of the marker set, the frames of the take.
+  std::ifstream ms(dir / "s" / "markerset.json");
+  const json set = json::parse(ms);
+  const int64_t frames = Corpus::Open((dir / "c.h5").string()).Summary("shapes_01").frames;
+  RunResult r = Csw("inspect --json " + Q(dir / "models.h5"), dir.path());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["format"], "models");
+  EXPECT_EQ(j["model_count"].get<int>(), 2);
+  const std::pair<const char*, const char*> models[] = {{"head_motion", "head_cluster"},
+                                                        {"forearm_motion", "forearm_cluster"}};
+  for (const auto& [model, cluster] : models) {
+    SCOPED_TRACE(model);
+    ASSERT_TRUE(j["models"].contains(model)) << j.dump();
+    const json& m = j["models"][model];
+    EXPECT_EQ(m["markers"].get<size_t>(), set[cluster].size());
+    EXPECT_EQ(m["training_takes"], json::array({"shapes_01"}));
+    EXPECT_EQ(m["training_frames"].get<int64_t>(), frames);
+    EXPECT_EQ(m["created_utc"].get<std::string>().size(), 20u);  // 2026-01-02T03:04:05Z
+  }
+  RunResult text = Csw("inspect " + Q(dir / "models.h5"), dir.path());
+  ASSERT_EQ(text.code, 0) << text.err;
+  EXPECT_NE(text.out.find("  head_motion: " + std::to_string(set["head_cluster"].size()) + " markers, "),
+            std::string::npos)
+      << text.out;
+}
+
+// C3D samples with NaN coordinates and a residual >= 0 (Vicon/pyCGM2): inspect
+// counted them as valid (and gave sum_xyz_valid null) while import dropped them.
+TEST(Cli, C3dNanWithResidualIsMissingInInspectAndImport) {
+  testing::TempDir dir;
+  const int64_t frames = 50, markers = 4;
+  Take t = SmallTake("nan", frames, markers);  // one missing sample: frame 3, marker 1
+  const fs::path c3d = dir / "nan.c3d";
+  WriteC3d(c3d.string(), t);
+  // Patch samples (frame, marker) to NaN coordinates with residual 0.0 (float storage, 16 bytes a sample).
+  const std::vector<std::pair<int64_t, int64_t>> patched = {{0, 0}, {10, 2}, {49, 3}};
+  {
+    std::fstream f(c3d, std::ios::in | std::ios::out | std::ios::binary);
+    unsigned char header[512];
+    f.read(reinterpret_cast<char*>(header), 512);
+    const int64_t data_block = header[16] | (header[17] << 8);  // word 9: first block of the data (1-based)
+    const int64_t analog_words = header[4] | (header[5] << 8);  // word 3: analog values per frame
+    ASSERT_EQ(header[2] | (header[3] << 8), markers);
+    const int64_t frame_bytes = markers * 16 + analog_words * 4;
+    const float nan = std::nanf(""), zero = 0.0f;
+    for (const auto& [fr, m] : patched) {
+      f.seekp((data_block - 1) * 512 + fr * frame_bytes + m * 16);
+      f.write(reinterpret_cast<const char*>(&nan), 4);
+      f.seekp((data_block - 1) * 512 + fr * frame_bytes + m * 16 + 12);
+      f.write(reinterpret_cast<const char*>(&zero), 4);
+    }
+  }
+  // The known answer, from the take the test wrote (file units are mm, POINT:SCALE -0.1 for float storage).
+  int64_t valid = 0;
+  double sum = 0;
+  for (int64_t fr = 0; fr < frames; ++fr) {
+    for (int64_t m = 0; m < markers; ++m) {
+      if (!t.markers.Visible(fr, m)) continue;
+      if (std::find(patched.begin(), patched.end(), std::make_pair(fr, m)) != patched.end()) continue;
+      const float* p = t.markers.at(fr, m);
+      sum += static_cast<double>(p[0]) + static_cast<double>(p[1]) + static_cast<double>(p[2]);
+      ++valid;
+    }
+  }
+  ASSERT_EQ(valid, frames * markers - 1 - 3);
+  RunResult r = Csw("inspect --json " + Q(c3d), dir.path());
+  ASSERT_EQ(r.code, 0) << r.err;
+  json j = json::parse(r.out);
+  EXPECT_EQ(j["valid_point_samples"].get<int64_t>(), valid);
+  ASSERT_TRUE(j["sum_xyz_valid"].is_number()) << j["sum_xyz_valid"].dump();
+  EXPECT_NEAR(j["sum_xyz_valid"].get<double>(), sum, 1e-9 * std::abs(sum));
+  // Import stores the same samples.
+  ASSERT_EQ(Csw("import " + Q(c3d) + " -o " + Q(dir / "c.h5"), dir.path()).code, 0);
+  Take back = Corpus::Open((dir / "c.h5").string()).LoadTake("nan");
+  EXPECT_EQ(back.markers.CountVisible(), valid);
+  for (const auto& [fr, m] : patched) EXPECT_FALSE(back.markers.Visible(fr, m)) << fr << "," << m;
 }
 
 }  // namespace

@@ -54,7 +54,7 @@ void PrintJson(const nlohmann::json& j) { std::cout << j.dump(2) << "\n"; }
 class InspectCommand : public Command {
  public:
   void Register(CLI::App& app) override {
-    sub_ = app.add_subcommand("inspect", "Print header facts of a C3D, TRC, TextGrid, EAF, WAV or corpus file");
+    sub_ = app.add_subcommand("inspect", "Print header facts of a C3D, TRC, TextGrid, EAF, WAV, corpus or model file");
     sub_->add_option("file", file_, "File to inspect")->required();
     sub_->add_flag("--json", json_, "Machine-readable JSON output");
   }
@@ -151,7 +151,8 @@ class SimulateCommand : public Command {
     sub_ = app.add_subcommand("simulate",
                               "The virtual cuer: write realistic cued-speech captures (C3D, WAV, TextGrid) with "
                               "ground truth");
-    sub_->add_option("corpus", options_.corpus, "shapes, visemes, sentences, or demo (all three)")
+    sub_->add_option("corpus", options_.corpus,
+                     "shapes, visemes, sentences, or demo (all three; every option below applies to it)")
         ->required()
         ->check(CLI::IsMember({"shapes", "visemes", "sentences", "demo"}));
     sub_->add_option("-o,--output", options_.output, "Output folder")->required();
@@ -162,7 +163,10 @@ class SimulateCommand : public Command {
     sub_->add_option("--sentences", options_.sentences_file, "File with one French sentence per line");
     sub_->add_option("--noise", options_.noise_mm, "Marker noise sigma in mm")->capture_default_str();
     sub_->add_option("--rate", options_.rate_hz, "Capture rate in Hz")->capture_default_str();
-    sub_->add_flag("!--no-occlusions", options_.occlusions, "No camera occlusions");
+    sub_->add_flag("!--no-occlusions", options_.occlusions, "No camera occlusions (dropped samples: --dropouts)");
+    sub_->add_option("--dropouts", options_.dropouts_per_s,
+                     "Rate of short dropped-sample runs per marker and second (0 = none)")
+        ->capture_default_str();
     sub_->add_flag("--label-swaps", options_.label_swaps, "Add a temporary swap of two hand marker labels per take");
     sub_->add_flag("--clean", options_.clean, "Also write <take>.clean.c3d without capture artefacts");
   }

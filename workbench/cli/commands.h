@@ -1,19 +1,17 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <memory>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "core/progress.h"
+#include "workbench/jobs/job_util.h"
 
 namespace csw::cli {
 
-// A bad combination of options detected after parsing (exit code 1).
-class UsageError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+// A bad combination of options detected after parsing (exit code 1); the jobs
+// throw the same type for their own option checks.
+using UsageError = jobs::UsageError;
 
 // One subcommand: registers its options on the app, then runs if parsed.
 class Command {

@@ -1,10 +1,13 @@
 // csw — the Cued Speech Workbench command-line tool. A thin shell over
 // workbench/jobs: parse options, run the job with a progress bar on stderr,
-// print results, map errors to exit codes (0 ok, 1 usage, 2 bad data).
+// print results, map errors to exit codes: 0 ok, 1 usage error, 2 bad data
+// (unreadable, damaged or inconsistent input), 3 internal error, 130 after
+// Ctrl-C (SIGINT), 143 after SIGTERM. A signal cancels the job through its
+// Progress (the job rolls back); a second one ends the process at once.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <chrono>
+#include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
@@ -17,9 +20,18 @@
 namespace {
 
 csw::Progress* g_progress = nullptr;
+std::atomic<int> g_signal{0};
 
-void OnSigint(int) {
+void OnSignal(int sig) {
+  if (g_signal.exchange(sig) != 0) _exit(128 + sig);  // second signal: the user means it
   if (g_progress) g_progress->Cancel();
+}
+
+void InstallHandler(int sig) {
+  struct sigaction sa {};
+  sa.sa_handler = OnSignal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(sig, &sa, nullptr);
 }
 
 }  // namespace
@@ -34,8 +46,8 @@ int main(int argc, char** argv) {
   csw::cli::ProgressPrinter printer(&quiet);
   csw::Progress progress([&printer](const std::string& stage, double f) { printer.Print(stage, f); });
   g_progress = &progress;
-  std::signal(SIGINT, OnSigint);
-  std::signal(SIGTERM, OnSigint);
+  InstallHandler(SIGINT);
+  InstallHandler(SIGTERM);
 
   std::vector<std::unique_ptr<csw::cli::Command>> commands = csw::cli::MakeCommands();
   for (auto& c : commands) c->Register(app);
@@ -54,9 +66,10 @@ int main(int argc, char** argv) {
       return rc;
     } catch (const csw::Cancelled&) {
       printer.Done();
-      std::fprintf(stderr, "csw: cancelled; nothing was changed\n");
-      return 130;
-    } catch (const csw::cli::UsageError& e) {
+      const int sig = g_signal.load();
+      std::fprintf(stderr, "csw: %s; nothing was changed\n", sig == SIGTERM ? "terminated" : "cancelled");
+      return sig == SIGTERM ? 143 : 130;
+    } catch (const csw::jobs::UsageError& e) {
       printer.Done();
       std::fprintf(stderr, "csw: %s\n", e.what());
       return 1;
@@ -66,8 +79,8 @@ int main(int argc, char** argv) {
       return 2;
     } catch (const std::bad_alloc&) {
       printer.Done();
-      std::fprintf(stderr, "csw: out of memory\n");
-      return 2;
+      std::fprintf(stderr, "csw: internal error: out of memory\n");
+      return 3;
     } catch (const std::exception& e) {
       printer.Done();
       std::fprintf(stderr, "csw: internal error: %s\n", e.what());

@@ -1,0 +1,22 @@
+#pragma once
+// Small pieces shared by the jobs: the usage-error type and file-type detection.
+#include <string>
+
+#include "core/error.h"
+
+namespace csw::jobs {
+
+// A request that cannot be run as given (a missing or contradictory option, an
+// option file that does not exist): the CLI exits 1 for these, 2 for bad data.
+// Derives from InvalidInput so callers that catch csw::Error still see it.
+class UsageError : public InvalidInput {
+ public:
+  using InvalidInput::InvalidInput;
+};
+
+// Format of a file from its extension: "c3d", "trc", "textgrid", "eaf", "wav",
+// "hdf5" (.h5/.hdf5: a corpus or a model file, told apart by its root "format"
+// attribute), or "" when unknown.
+std::string FormatOf(const std::string& path);
+
+}  // namespace csw::jobs

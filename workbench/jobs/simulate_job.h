@@ -1,0 +1,45 @@
+#pragma once
+// csw simulate: the virtual cuer (datasets/virtual_cuer.h).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/progress.h"
+
+namespace csw {
+struct SimulateOptions;
+}
+
+namespace csw::jobs {
+
+// Writes C3D, WAV, TextGrid, ground truth and markerset.json per take into
+// options.output. Every capture option applies to every corpus, demo included
+// (demo: shapes, visemes and the first `count` sentences in
+// output/{shapes,visemes,sentences}, int16 C3D, no ground truth).
+struct SimulateJobOptions {
+  std::string corpus = "sentences";  // shapes, visemes, sentences, or demo (all three)
+  std::string output;
+  uint64_t seed = 1;
+  int count = 0;                   // sentences: first N (0 = all / demo default 20)
+  std::vector<std::string> texts;  // user sentences instead of the shipped list
+  std::string sentences_file;      // one sentence per line
+  double noise_mm = 0.2;
+  bool occlusions = true;
+  double dropouts_per_s = 0.03;  // per marker: rate of short dropped-sample runs
+  bool label_swaps = false;
+  double rate_hz = 120.0;
+  bool clean = false;         // also write <take>.clean.c3d without artefacts
+  std::string Check() const;  // "" when valid, else the reason (a usage error)
+};
+
+// The datasets options for `options` (sentences_file not read yet).
+SimulateOptions ToSimulateOptions(const SimulateJobOptions& options);
+
+// Writes everything into a hidden sibling folder ".<output>.csw-partial" and
+// moves it into place at the end, so a failed or cancelled run changes nothing
+// (a stale partial folder from a killed run is removed by the next run).
+// Returns the take names (demo: "shapes/shapes_01", ...), sorted for demo.
+// Throws UsageError when Check() fails, Cancelled, csw::Error.
+std::vector<std::string> Simulate(const SimulateJobOptions& options, Progress& progress);
+
+}  // namespace csw::jobs
