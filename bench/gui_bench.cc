@@ -30,7 +30,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A corpus of three synthetic takes; the first (alphabetically) lasts `seconds`.
+// A corpus of three virtual-cuer demo takes; the first (alphabetically) lasts `seconds`.
 std::string MakeCorpus(double seconds, bool one_tier) {
   std::string path = (fs::temp_directory_path() / ("csw_gui_bench_" + std::to_string(static_cast<int>(seconds)) +
                                                    (one_tier ? "_1tier" : "") + ".h5"))
@@ -42,7 +42,7 @@ std::string MakeCorpus(double seconds, bool one_tier) {
     o.name = "take" + std::to_string(i);
     o.seconds = i == 0 ? seconds : 20.0;
     csw::Take t = csw::gui::MakeDemoTake(o);
-    if (one_tier) t.tiers = {t.tiers[1]};  // syllables only: audio + tier + marker = three lanes
+    if (one_tier) t.tiers = {t.tiers[1]};  // phones only: audio + tier + marker = three lanes
     tx.WriteTake(t);
   }
   tx.Commit();
@@ -104,7 +104,7 @@ void BM_PlaybackFrame(benchmark::State& state) {
   ShowExposed(window);
   if (!window.OpenCorpus(QString::fromStdString(corpus))) state.SkipWithError("cannot open the corpus");
   csw::gui::TimeSeriesPanel* plots = window.plots();
-  plots->SetMarkerSeries(static_cast<int>(window.take()->MarkerIndex("index_tip")), csw::gui::MarkerQuantity::kSpeed);
+  plots->SetMarkerSeries(static_cast<int>(window.take()->MarkerIndex("ITIP")), csw::gui::MarkerQuantity::kSpeed);
   plots->SetTimeRange(0.0, 10.0);
   if (plots->lane_count() != 3 || window.take()->markers.markers() != 113) state.SkipWithError("unexpected set-up");
   csw::gui::Playback* playback = window.playback();

@@ -17,13 +17,13 @@ namespace csw {
 
 namespace fs = std::filesystem;
 
-std::string UtcNow() {
+std::string UtcNow(UtcZone zone) {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};
   gmtime_r(&t, &tm);
   char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
+  return std::string(buf) + (zone == UtcZone::kOffset ? "+00:00" : "Z");
 }
 
 std::string ReadTextFile(const std::string& path) {

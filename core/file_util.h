@@ -7,8 +7,13 @@
 
 namespace csw {
 
-// The current time as ISO 8601 UTC, e.g. "2026-01-02T03:04:05Z".
-std::string UtcNow();
+// How UtcNow spells the UTC zone: "Z" (TRC, corpus and model files) or the
+// numeric offset "+00:00" (the form ELAN writes in EAF headers).
+enum class UtcZone { kZ, kOffset };
+
+// The current time as ISO 8601 UTC to the second, e.g. "2026-01-02T03:04:05Z"
+// or, with UtcZone::kOffset, "2026-01-02T03:04:05+00:00".
+std::string UtcNow(UtcZone zone = UtcZone::kZ);
 
 // The whole file as bytes; IoError naming the file when it cannot be read.
 std::string ReadTextFile(const std::string& path);

@@ -2,12 +2,11 @@
 
 #include <algorithm>
 #include <cctype>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sstream>
 
 #include "core/error.h"
+#include "core/file_util.h"
 #include "core/json_util.h"
 
 namespace csw {
@@ -165,13 +164,7 @@ MarkerSet ParseMarkerSet(const std::string& json_text, const std::string& file) 
   return set;
 }
 
-MarkerSet LoadMarkerSet(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, "cannot open marker set");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ParseMarkerSet(ss.str(), path);
-}
+MarkerSet LoadMarkerSet(const std::string& path) { return ParseMarkerSet(ReadTextFile(path), path); }
 
 std::string MarkerSetToJson(const MarkerSet& set) {
   json j;

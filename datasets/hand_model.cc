@@ -2,12 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sstream>
 
 #include "core/error.h"
+#include "core/file_util.h"
 #include "core/json_util.h"
 
 namespace csw {
@@ -52,8 +51,6 @@ constexpr double kThumbTwistDeg = -55.0;       // thumb nail faces sideways
 // Frame indices: 0 forearm, 1 palm, 2 + 3 * finger + phalanx.
 int SegmentIndex(int finger, int phalanx) { return 2 + 3 * finger + phalanx; }
 
-json ParseJson(const std::string& text, const std::string& file) { return ParseJsonText(text, file); }
-
 }  // namespace
 
 // ---------------------------------------------------------------- config
@@ -89,7 +86,7 @@ bool HandConfig::WithinLimits(const Eigen::VectorXd& angles, double slack_rad) c
 
 HandConfig ParseHandConfig(const std::string& json_text, const std::string& file) {
   const std::string where = file.empty() ? std::string("<hand config>") : file;
-  json j = ParseJson(json_text, where);
+  json j = ParseJsonText(json_text, where);
   auto fail = [&](const std::string& what) -> void { throw InvalidInput(where + ": hand configuration: " + what); };
   if (!j.is_object()) fail("must be a JSON object");
   if (!j.contains("joints") || !j["joints"].is_array()) fail("needs a \"joints\" array");
@@ -152,13 +149,7 @@ HandConfig ParseHandConfig(const std::string& json_text, const std::string& file
   return config;
 }
 
-HandConfig LoadHandConfig(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, "cannot open");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ParseHandConfig(ss.str(), path);
-}
+HandConfig LoadHandConfig(const std::string& path) { return ParseHandConfig(ReadTextFile(path), path); }
 
 HandConfig DefaultHandConfig() { return ParseHandConfig(DefaultHandConfigJson(), "datasets/config/hand.json"); }
 

@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "core/error.h"
+#include "core/file_util.h"
 #include "core/json_util.h"
 #include "datasets/face_model.h"
 
@@ -70,11 +69,7 @@ PlacementConfig ParsePlacementConfig(const std::string& json_text, const std::st
 }
 
 PlacementConfig LoadPlacementConfig(const std::string& path, const VirtualFace* face) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, "cannot open");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ParsePlacementConfig(ss.str(), path, face);
+  return ParsePlacementConfig(ReadTextFile(path), path, face);
 }
 
 PlacementConfig DefaultPlacementConfig() {

@@ -14,40 +14,12 @@
 
 #include "core/error.h"
 #include "models/frame_selection.h"
+#include "models/so3.h"
 
 namespace csw {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-Eigen::Matrix3d Hat(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v(2), v(1),  //
-      v(2), 0, -v(0),   //
-      -v(1), v(0), 0;
-  return m;
-}
-
-// exp(δ) (Rodrigues) and the left Jacobian of SO(3) at δ:
-// exp(δ + ε) ≈ exp(J_l(δ) ε) exp(δ).
-void ExpAndLeftJacobian(const Eigen::Vector3d& d, Eigen::Matrix3d* r, Eigen::Matrix3d* jl) {
-  const double t2 = d.squaredNorm();
-  const Eigen::Matrix3d k = Hat(d);
-  const Eigen::Matrix3d k2 = k * k;
-  double a, b, c;  // sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³
-  if (t2 < 1e-8) {
-    a = 1.0 - t2 / 6.0;
-    b = 0.5 - t2 / 24.0;
-    c = 1.0 / 6.0 - t2 / 120.0;
-  } else {
-    const double t = std::sqrt(t2);
-    a = std::sin(t) / t;
-    b = (1.0 - std::cos(t)) / t2;
-    c = (t - std::sin(t)) / (t2 * t);
-  }
-  *r = Eigen::Matrix3d::Identity() + a * k + b * k2;
-  if (jl) *jl = Eigen::Matrix3d::Identity() + b * k + c * k2;
-}
 
 std::string LayoutSummary(const FaceLayout& layout) {
   return std::to_string(layout.num_markers()) + " (" + std::to_string(layout.head.size()) + " head + " +
@@ -401,7 +373,7 @@ struct FrameProblem {
     const Eigen::Vector3d t = t0 + Eigen::Vector3d(params[3], params[4], params[5]);
     const Eigen::Map<const Eigen::VectorXd> p(params + 6, np);
     Eigen::Matrix3d e, jl;
-    ExpAndLeftJacobian(d, &e, jacobian ? &jl : nullptr);
+    so3::ExpAndLeftJacobian(d, &e, jacobian ? &jl : nullptr);
     const Eigen::Matrix3d r = e * r0;
     const Eigen::Matrix3d rt = r.transpose();
     Eigen::Map<Eigen::VectorXd> res(residuals, nr);
@@ -455,7 +427,7 @@ struct FrameProblem {
       const Eigen::Vector3d u = r * x_head.segment<3>(3 * j);
       res.segment<3>(row) = w * (u + t) + x_rest.segment<3>(3 * j) - obs.col(nh + j);
       if (jacobian) {
-        jac.block<3, 3>(row, 0) = -w * Hat(u) * jl;
+        jac.block<3, 3>(row, 0) = -w * so3::Hat(u) * jl;
         jac.block(row, 3, 3, 3).diagonal().setConstant(w);
         jac.block(row, 6, 3, np).noalias() = (w * r) * m->loadings.middleRows(3 * j, 3);
         jac.block(row, 6, 3, np) += m->rest_loadings.middleRows(3 * j, 3);
@@ -547,7 +519,7 @@ void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray
     const auto& summary = solver.Solve(problem, &x);
 
     Eigen::Matrix3d e;
-    ExpAndLeftJacobian(x.template head<3>(), &e, nullptr);
+    so3::ExpAndLeftJacobian(x.template head<3>(), &e, nullptr);
     RigidTransform pose;
     pose.rotation = e * problem.r0;
     pose.translation = problem.t0 + x.template segment<3>(3);

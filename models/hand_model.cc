@@ -17,6 +17,7 @@
 #include "core/error.h"
 #include "models/frame_selection.h"
 #include "models/joint_angles.h"
+#include "models/so3.h"
 
 namespace csw {
 namespace {
@@ -25,12 +26,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // ---------------------------------------------------------------------------
 // Segment frames and angles
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
-  return m;
-}
 
 // Frame of a segment with ≥ 3 markers (columns of `m`), see the header.
 std::optional<Eigen::Matrix3d> PlaneFrame(const Eigen::Matrix3Xd& m) {
@@ -226,38 +221,6 @@ MarkerArray Columns(const MarkerArray& m, int64_t first, int64_t count) {
 // ---------------------------------------------------------------------------
 // Inversion
 
-// Rodrigues: exp([w]×).
-Eigen::Matrix3d ExpSo3(const Eigen::Vector3d& w) {
-  const double t2 = w.squaredNorm();
-  const Eigen::Matrix3d k = Skew(w);
-  double a, b;
-  if (t2 < 1e-12) {
-    a = 1.0 - t2 / 6.0;
-    b = 0.5 - t2 / 24.0;
-  } else {
-    const double t = std::sqrt(t2);
-    a = std::sin(t) / t;
-    b = (1.0 - std::cos(t)) / t2;
-  }
-  return Eigen::Matrix3d::Identity() + a * k + b * k * k;
-}
-
-// Left Jacobian of SO(3): exp(w + e) ≈ exp(J_l(w)·e)·exp(w).
-Eigen::Matrix3d LeftJacobianSo3(const Eigen::Vector3d& w) {
-  const double t2 = w.squaredNorm();
-  const Eigen::Matrix3d k = Skew(w);
-  double a, b;
-  if (t2 < 1e-12) {
-    a = 0.5 - t2 / 24.0;
-    b = 1.0 / 6.0 - t2 / 120.0;
-  } else {
-    const double t = std::sqrt(t2);
-    a = (1.0 - std::cos(t)) / t2;
-    b = (t - std::sin(t)) / (t2 * t);
-  }
-  return Eigen::Matrix3d::Identity() + a * k + b * k * k;
-}
-
 // The model's pieces in the form the solver uses (built once per InvertHand).
 struct Kernel {
   int nf = 0, nh = 0, p = 0, na = 0;  // forearm markers, hand markers, parameters, active angles
@@ -348,7 +311,7 @@ struct HandResidual {
   bool operator()(const double* x, double* residuals, double* jacobian) const {
     const Eigen::Map<const Eigen::Vector3d> delta(x);
     const Eigen::Vector3d t = w->t0 + Eigen::Map<const Eigen::Vector3d>(x + 3);
-    const Eigen::Matrix3d r = ExpSo3(delta) * w->r0;
+    const Eigen::Matrix3d r = so3::Exp(delta) * w->r0;
     LocalCoordinates(*k, x + 6, w);
     const int nm = k->nf + k->nh;
     const int nr = NumResiduals();
@@ -368,7 +331,7 @@ struct HandResidual {
 
     Eigen::Map<Eigen::MatrixXd> jac(jacobian, nr, 6 + k->p);
     jac.setZero();
-    const Eigen::Matrix3d jl = LeftJacobianSo3(delta);
+    const Eigen::Matrix3d jl = so3::LeftJacobian(delta);
     // d local / d q for every hand marker: (Xsinᵀ·diag(cos a) − Xcosᵀ·diag(sin a))·C·diag(scale).
     w->m.noalias() = k->xsin_t * w->c.asDiagonal();
     w->m.noalias() -= k->xcos_t * w->s.asDiagonal();
@@ -378,10 +341,10 @@ struct HandResidual {
       const Eigen::Vector3d local =
           j < k->nf ? Eigen::Vector3d(k->reference.col(j)) : Eigen::Vector3d(w->local.segment<3>(3 * (j - k->nf)));
       if (j < k->nf) {
-        jac.block<3, 3>(3 * j, 0).noalias() = -k->forearm_weight * Skew(r * local) * jl;
+        jac.block<3, 3>(3 * j, 0).noalias() = -k->forearm_weight * so3::Hat(r * local) * jl;
         jac.block<3, 3>(3 * j, 3) = k->forearm_weight * Eigen::Matrix3d::Identity();
       } else {
-        jac.block<3, 3>(3 * j, 0).noalias() = -Skew(r * local) * jl;
+        jac.block<3, 3>(3 * j, 0).noalias() = -so3::Hat(r * local) * jl;
         jac.block<3, 3>(3 * j, 3).setIdentity();
         jac.block(3 * j, 6, 3, k->p).noalias() = r * w->dlocal.middleRows(3 * (j - k->nf), 3);
       }
@@ -863,7 +826,7 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
       have_prev = false;
       continue;
     }
-    const Eigen::Matrix3d r = Eigen::Quaterniond(ExpSo3(x.head<3>()) * w.r0).normalized().toRotationMatrix();
+    const Eigen::Matrix3d r = Eigen::Quaterniond(so3::Exp(x.head<3>()) * w.r0).normalized().toRotationMatrix();
     const Eigen::Vector3d t = w.t0 + x.segment<3>(3);
     q = x.tail(p);
     r_prev = r;

@@ -7,9 +7,9 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
-#include <sstream>
 
 #include "core/error.h"
+#include "core/file_util.h"
 
 namespace csw {
 namespace {
@@ -163,11 +163,7 @@ PhasingModel PhasingModelFromJson(const nlohmann::json& json, const std::string&
 }
 
 PhasingModel LoadPhasingModel(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path, "cannot open for reading");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  const std::string text = buffer.str();
+  const std::string text = ReadTextFile(path);
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);

@@ -1,9 +1,7 @@
 #include "io/formats/eaf.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <ctime>
 #include <filesystem>
 #include <optional>
 #include <pugixml.hpp>
@@ -12,6 +10,7 @@
 #include <unordered_map>
 
 #include "core/error.h"
+#include "core/file_util.h"
 #include "io/formats/text_util.h"
 
 namespace csw {
@@ -378,15 +377,6 @@ class EafReader {
   double max_ms_ = 0.0;
 };
 
-std::string NowIso8601() {
-  std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[40];
-  std::strftime(buf, sizeof(buf), "%Y-%m-%dT%H:%M:%S+00:00", &tm);
-  return buf;
-}
-
 std::string MimeTypeFor(const std::string& url) {
   std::string ext = std::filesystem::path(url).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -461,7 +451,7 @@ void WriteEaf(const std::string& path, const std::vector<LabelTier>& tiers, cons
   decl.append_attribute("encoding") = "UTF-8";
   pugi::xml_node root = doc.append_child("ANNOTATION_DOCUMENT");
   root.append_attribute("AUTHOR") = "";
-  root.append_attribute("DATE") = NowIso8601().c_str();
+  root.append_attribute("DATE") = UtcNow(UtcZone::kOffset).c_str();
   root.append_attribute("FORMAT") = "3.0";
   root.append_attribute("VERSION") = "3.0";
   root.append_attribute("xmlns:xsi") = "http://www.w3.org/2001/XMLSchema-instance";

@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -14,6 +12,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/file_util.h"
 #include "core/sha256.h"
 #include "io/formats/text_util.h"
 
@@ -88,15 +87,6 @@ bool StartsWithNoCase(std::string_view s, std::string_view prefix) {
 bool IsNanToken(std::string_view s) {
   if (!s.empty() && (s.front() == '-' || s.front() == '+')) s.remove_prefix(1);
   return s.size() == 3 && StartsWithNoCase(s, "nan");
-}
-
-std::string UtcNow() {
-  std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof(buf), "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
 }
 
 // Largest |coordinate| in millimetres accepted from a file.

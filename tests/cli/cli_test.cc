@@ -23,6 +23,7 @@
 #include "io/c3d/c3d.h"
 #include "io/corpus/corpus.h"
 #include "io/formats/textgrid.h"
+#include "io/formats/trc.h"
 #include "io/formats/wav.h"
 #include "tests/cli/cli_util.h"
 #include "tests/testing/testing.h"
@@ -213,22 +214,27 @@ TEST(Cli, ImportInfoExportRoundTrip) {
     fs::path out = dir / (std::string("back.") + fmt);
     RunResult ex = Csw("export " + Q(corpus) + " --take take01 --format " + fmt + " -o " + Q(out), dir.path());
     ASSERT_EQ(ex.code, 0) << ex.err;
-    Take back = std::string(fmt) == "c3d" ? ReadC3d(out.string()) : Take{};
-    if (std::string(fmt) == "c3d") {
-      ASSERT_EQ(back.frames(), take.frames());
-      ASSERT_EQ(back.marker_names, take.marker_names);
-      for (size_t i = 0; i < take.markers.data().size(); ++i) {
-        float a = take.markers.data()[i], b = back.markers.data()[i];
-        if (std::isnan(a)) {
-          EXPECT_TRUE(std::isnan(b));
-        } else {
-          ASSERT_EQ(a, b) << i;
-        }
+    // Both files hold the take's float samples exactly (C3D as float32, TRC with
+    // the shortest decimal that reads back to the same float): tolerance 0.
+    const bool c3d = std::string(fmt) == "c3d";
+    Take back = c3d ? ReadC3d(out.string()) : ReadTrc(out.string());
+    SCOPED_TRACE(fmt);
+    ASSERT_EQ(back.frames(), take.frames());
+    ASSERT_EQ(back.marker_names, take.marker_names);
+    EXPECT_EQ(back.rate_hz, take.rate_hz);
+    ASSERT_EQ(back.markers.data().size(), take.markers.data().size());
+    for (size_t i = 0; i < take.markers.data().size(); ++i) {
+      float a = take.markers.data()[i], b = back.markers.data()[i];
+      if (std::isnan(a)) {
+        EXPECT_TRUE(std::isnan(b)) << i;
+      } else {
+        ASSERT_EQ(a, b) << i;
       }
+    }
+    if (c3d) {
       ASSERT_EQ(back.events.size(), 1u);
       EXPECT_NEAR(back.events[0].time_s, 0.5, 1e-6);
     }
-    EXPECT_TRUE(fs::exists(out));
   }
   fs::path csv = dir / "back.csv";
   ASSERT_EQ(Csw("export " + Q(corpus) + " --take take02 --format csv -o " + Q(csv), dir.path()).code, 0);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -21,10 +22,31 @@ fs::path TempDir(const std::string& name) {
   return d;
 }
 
-TEST(FileUtil, UtcNowIsIso8601Utc) {
+// The stamp is the system clock's UTC time: it lies between two readings of
+// std::time taken around the call (same second, or the next one at a tick).
+std::string Stamp(std::time_t t, const char* format) {
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[40];
+  std::strftime(buf, sizeof buf, format, &tm);
+  return buf;
+}
+
+TEST(FileUtil, UtcNowIsTheCurrentUtcTimeInBothZoneSpellings) {
+  for (UtcZone zone : {UtcZone::kZ, UtcZone::kOffset}) {
+    const char* format = zone == UtcZone::kZ ? "%Y-%m-%dT%H:%M:%SZ" : "%Y-%m-%dT%H:%M:%S+00:00";
+    const std::time_t before = std::time(nullptr);
+    const std::string s = UtcNow(zone);
+    const std::time_t after = std::time(nullptr);
+    EXPECT_TRUE(s == Stamp(before, format) || s == Stamp(after, format)) << s;
+    EXPECT_TRUE(std::regex_match(s, std::regex(zone == UtcZone::kZ ? R"(\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}Z)"
+                                                                   : R"(\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}\+00:00)")))
+        << s;
+  }
+  // The default is the "Z" form.
+  const std::time_t before = std::time(nullptr);
   const std::string s = UtcNow();
-  EXPECT_TRUE(std::regex_match(s, std::regex(R"(\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}Z)"))) << s;
-  EXPECT_GE(std::stoi(s.substr(0, 4)), 2024);
+  EXPECT_TRUE(s == Stamp(before, "%Y-%m-%dT%H:%M:%SZ") || s == Stamp(std::time(nullptr), "%Y-%m-%dT%H:%M:%SZ")) << s;
 }
 
 TEST(FileUtil, ReadTextFileReadsBytesAndNamesMissingFile) {

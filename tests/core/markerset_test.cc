@@ -1,6 +1,10 @@
 #include "core/markerset.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 
 #include "core/error.h"
 
@@ -69,6 +73,36 @@ TEST(MarkerSet, RejectsBrokenDefinitionsWithReasons) {
     EXPECT_EQ(e.where().file, "bad.json");
     EXPECT_EQ(e.where().line.value_or(0), 3);
   }
+}
+
+// LoadMarkerSet reads the file (core ReadTextFile) and names it in errors.
+TEST(MarkerSet, LoadFromFileEqualsParseAndNamesBadFiles) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("csw_markerset_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "set.json").string();
+  std::ofstream(path, std::ios::binary) << kSet;
+  const MarkerSet loaded = LoadMarkerSet(path);
+  const MarkerSet parsed = ParseMarkerSet(kSet, "demo.json");
+  EXPECT_EQ(loaded.name, "demo");
+  EXPECT_EQ(loaded.AllMarkers(), parsed.AllMarkers());
+  EXPECT_EQ(loaded.aliases, parsed.aliases);
+  EXPECT_EQ(loaded.sticks, parsed.sticks);
+  try {
+    LoadMarkerSet((dir / "absent.json").string());
+    FAIL() << "missing file accepted";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("absent.json"), std::string::npos) << e.what();
+  }
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << "{\n  \"name\": \"x\",\n  oops\n}";
+  try {
+    LoadMarkerSet(path);
+    FAIL() << "broken JSON accepted";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(e.where().file, path);
+    EXPECT_EQ(e.where().line, 3);
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -1,11 +1,15 @@
 #include "datasets/hand_model.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 
 #include "core/error.h"
+#include "datasets/placements.h"
 
 namespace csw {
 namespace {
@@ -51,6 +55,49 @@ TEST(HandConfig, RejectsBadDefinitionsNamingTheRule) {
   bad = good;
   bad.replace(bad.find("\"wrist_flex\": 15"), 16, "\"wrist_twist\": 1");
   EXPECT_THROW(ParseHandConfig(bad), InvalidInput);
+}
+
+// The config files are read whole (core ReadTextFile): a file holding the
+// shipped JSON loads to the shipped configuration; a missing file is an
+// IoError naming it.
+TEST(HandConfig, LoadFromFileEqualsTheShippedConfig) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("csw_hand_config_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string hand_path = (dir / "hand.json").string();
+  std::ofstream(hand_path, std::ios::binary) << DefaultHandConfigJson();
+  const HandConfig loaded = LoadHandConfig(hand_path);
+  const HandConfig shipped = DefaultHandConfig();
+  ASSERT_EQ(loaded.joints.size(), shipped.joints.size());
+  for (size_t j = 0; j < shipped.joints.size(); ++j) {
+    EXPECT_EQ(loaded.joints[j].name, shipped.joints[j].name);
+    EXPECT_EQ(loaded.joints[j].min_rad, shipped.joints[j].min_rad);
+    EXPECT_EQ(loaded.joints[j].max_rad, shipped.joints[j].max_rad);
+  }
+  ASSERT_EQ(loaded.postures.size(), shipped.postures.size());
+  for (size_t p = 0; p < shipped.postures.size(); ++p) EXPECT_EQ(loaded.postures[p].angles, shipped.postures[p].angles);
+
+  const std::string place_path = (dir / "placements.json").string();
+  std::ofstream(place_path, std::ios::binary) << DefaultPlacementConfigJson();
+  const PlacementConfig places = LoadPlacementConfig(place_path);
+  const PlacementConfig shipped_places = DefaultPlacementConfig();
+  ASSERT_EQ(places.placements.size(), shipped_places.placements.size());
+  for (size_t p = 0; p < places.placements.size(); ++p) {
+    EXPECT_EQ(places.placements[p].name, shipped_places.placements[p].name);
+    EXPECT_EQ(places.placements[p].offset, shipped_places.placements[p].offset);
+    EXPECT_EQ(places.placements[p].anchor, shipped_places.placements[p].anchor);
+  }
+
+  for (auto load :
+       {+[](const std::string& f) { LoadHandConfig(f); }, +[](const std::string& f) { LoadPlacementConfig(f); }}) {
+    try {
+      load((dir / "absent.json").string());
+      ADD_FAILURE() << "missing file accepted";
+    } catch (const IoError& e) {
+      EXPECT_NE(std::string(e.what()).find("absent.json"), std::string::npos) << e.what();
+    }
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TEST(VirtualHand, ForwardKinematicsKnownAnswers) {

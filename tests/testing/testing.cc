@@ -23,6 +23,16 @@ fs::path SharedData(const std::string& relative) {
   return fs::exists(p, ec) ? p : fs::path();
 }
 
+std::string MissingSharedData(std::initializer_list<std::string> relative) {
+  std::string missing;
+  for (const std::string& r : relative) {
+    if (!SharedData(r).empty()) continue;
+    if (!missing.empty()) missing += ", ";
+    missing += "../shared/data/" + r;
+  }
+  return missing;
+}
+
 fs::path SourceDir() {
   const char* env = std::getenv("CSW_SOURCE_DIR");
   return env ? fs::path(env) : fs::path(CSW_SOURCE_DIR_DEFAULT);

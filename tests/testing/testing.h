@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the tests: where the third-party data lives, temporary dirs.
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 
 namespace csw::testing {
@@ -9,6 +10,9 @@ namespace csw::testing {
 std::filesystem::path SharedDataDir();
 // SharedDataDir()/relative, or calls GTEST_SKIP-able empty path when absent.
 std::filesystem::path SharedData(const std::string& relative);
+// The paths among `relative` that are absent from ../shared/data, each as
+// "../shared/data/<path>", joined by ", "; "" when all are there.
+std::string MissingSharedData(std::initializer_list<std::string> relative);
 // The project source tree (CSW_SOURCE_DIR).
 std::filesystem::path SourceDir();
 
@@ -28,10 +32,11 @@ class TempDir {
 
 }  // namespace csw::testing
 
-// Skips the current test with a clear message when ../shared/data is absent.
-#define CSW_REQUIRE_SHARED_DATA(rel)                                           \
-  do {                                                                         \
-    if (::csw::testing::SharedData(rel).empty())                               \
-      GTEST_SKIP() << "shared test data not found: ../shared/data/" << (rel)   \
-                   << " (set CSW_SHARED_DATA to the folder to run this test)"; \
+// Skips the current test, naming every missing file, when any of the given
+// ../shared/data files is absent: CSW_REQUIRE_SHARED_DATA("a.c3d", "b.trc").
+#define CSW_REQUIRE_SHARED_DATA(...)                                                                         \
+  do {                                                                                                       \
+    const std::string csw_missing_ = ::csw::testing::MissingSharedData({__VA_ARGS__});                       \
+    if (!csw_missing_.empty())                                                                               \
+      GTEST_SKIP() << "missing " << csw_missing_ << " (set CSW_SHARED_DATA to the folder to run this test)"; \
   } while (0)

@@ -47,14 +47,17 @@ QStringList RunTour(const TourOptions& options) {
   QString corpus = QDir(options.work_dir).filePath("demo.h5");
   QFile::remove(corpus);
 
-  // 1. The synthetic take, written straight into a new corpus.
+  // 1. The virtual cuer's demo take (one sentence), written straight into a new corpus.
   DemoTakeOptions demo;
-  demo.seconds = 30.0;
+  const SimulationResult sim = SimulateDemoTake(demo);
   {
     CorpusTransaction tx(corpus.toStdString());
-    tx.WriteTake(MakeDemoTake(demo));
+    tx.WriteTake(sim.take);
     tx.Commit();
   }
+  // The middle key of the sentence: the fingertip reaches its placement here.
+  if (sim.keys.empty()) throw Error("tour: the demo take has no cue keys");
+  const double key_s = sim.keys[sim.keys.size() / 2].timing.placement_target_s;
   QString set_path = QDir(options.work_dir).filePath("synthetic-cuer.json");
   {
     std::ofstream out(set_path.toStdString());
@@ -83,28 +86,29 @@ QStringList RunTour(const TourOptions& options) {
     if (window.StartImport(import)) loop.exec();
   }
 
-  // 3. The main window on the synthetic take: a picked fingertip, its speed, mid-take.
+  // 3. The main window on the demo take: the picked index fingertip, its speed,
+  // at the middle key's placement target.
   window.browser()->SelectTake(QString::fromStdString(demo.name));
   std::shared_ptr<const Take> take = window.take();
   if (!take) throw Error("tour: the demo take did not load");
-  int tip = static_cast<int>(take->MarkerIndex("index_tip"));
-  window.marker_view()->Zoom(1.3);
-  window.marker_view()->Pan(0, 50);
-  window.playback()->Seek(static_cast<int64_t>(6.2 * take->rate_hz));
+  int tip = static_cast<int>(take->MarkerIndex("ITIP"));
+  if (tip < 0) throw Error("tour: the demo take has no ITIP marker");
+  window.marker_view()->Zoom(2.0);
+  window.playback()->Seek(static_cast<int64_t>(key_s * take->rate_hz));
   window.marker_view()->SelectMarker(tip);
   window.marker_combo()->setCurrentIndex(tip + 1);
   window.quantity_combo()->setCurrentIndex(3);  // speed
   window.plots()->SetMarkerSeries(tip, MarkerQuantity::kSpeed);
-  window.plots()->SetTimeRange(4.0, 10.0);
-  window.plots()->SetCursorTime(6.2);
+  window.plots()->SetTimeRange(0.0, take->duration_s());
+  window.plots()->SetCursorTime(key_s);
   written << Shot(&window, options.out_dir, "01-main-window.png");
 
-  // 4. Zoomed plots: syllables, cues and the hand leading the voice.
-  window.plots()->SetTimeRange(5.6, 7.1);
-  window.plots()->SetCursorTime(6.2);
+  // 4. Zoomed plots: phones, keys and the hand leading the voice.
+  window.plots()->SetTimeRange(key_s - 0.75, key_s + 0.75);
+  window.plots()->SetCursorTime(key_s);
   written << Shot(window.plots_dock(), options.out_dir, "02-plots-zoomed.png");
 
-  // 5. The 3D view alone, orbited, with a gap in the little finger.
+  // 5. The 3D view alone, orbited: face, throat, forearm and hand markers with their sticks.
   window.marker_view()->Orbit(-60, 10);
   window.marker_view()->Zoom(1.25);
   window.marker_view()->Pan(0, 110);

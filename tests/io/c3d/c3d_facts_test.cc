@@ -60,7 +60,7 @@ TEST(C3dFacts, MipsTwinsEqualIntel) {
                              std::pair{"c3d.org/sample_01/Eb015sr.c3d", "c3d.org/sample_01/Eb015pr.c3d"},
                              std::pair{"c3d.org/sample_02/sgi_int.c3d", "c3d.org/sample_02/pc_int.c3d"},
                              std::pair{"c3d.org/sample_02/sgi_real.c3d", "c3d.org/sample_02/pc_real.c3d"}}) {
-    CSW_REQUIRE_SHARED_DATA(std::string("c3d/") + mips);
+    CSW_REQUIRE_SHARED_DATA(std::string("c3d/") + mips, std::string("c3d/") + intel);
     SCOPED_TRACE(mips);
     EXPECT_EQ(InfoOf(mips).processor, "mips");
     EXPECT_EQ(InfoOf(intel).processor, "intel");
@@ -75,7 +75,8 @@ TEST(C3dFacts, MipsTwinsEqualIntel) {
 }
 
 TEST(C3dFacts, DecTwinsOfSample01EqualIntel) {
-  CSW_REQUIRE_SHARED_DATA("c3d/c3d.org/sample_01/Eb015vi.c3d");
+  CSW_REQUIRE_SHARED_DATA("c3d/c3d.org/sample_01/Eb015vi.c3d", "c3d/c3d.org/sample_01/Eb015vr.c3d",
+                          "c3d/c3d.org/sample_01/Eb015pi.c3d", "c3d/c3d.org/sample_01/Eb015pr.c3d");
   EXPECT_EQ(InfoOf("c3d.org/sample_01/Eb015vr.c3d").processor, "dec");
   ExpectSameTake("c3d.org/sample_01/Eb015vi.c3d", "c3d.org/sample_01/Eb015pi.c3d");
   ExpectSameTake("c3d.org/sample_01/Eb015vr.c3d", "c3d.org/sample_01/Eb015pr.c3d");
@@ -103,8 +104,10 @@ TEST(C3dFacts, DecFloatIsSwappedHalvesDividedByFour) {
 }
 
 TEST(C3dFacts, Sample01HasThreeHeaderEvents) {
-  CSW_REQUIRE_SHARED_DATA("c3d/c3d.org/sample_01/Eb015pi.c3d");
-  for (const char* f : {"Eb015pi.c3d", "Eb015pr.c3d", "Eb015si.c3d", "Eb015sr.c3d", "Eb015vi.c3d", "Eb015vr.c3d"}) {
+  const char* const files[] = {"Eb015pi.c3d", "Eb015pr.c3d", "Eb015si.c3d",
+                               "Eb015sr.c3d", "Eb015vi.c3d", "Eb015vr.c3d"};
+  for (const char* f : files) CSW_REQUIRE_SHARED_DATA(std::string("c3d/c3d.org/sample_01/") + f);
+  for (const char* f : files) {
     const std::string rel = std::string("c3d.org/sample_01/") + f;
     SCOPED_TRACE(rel);
     // The header's event count is the 16-bit word at byte 300.
@@ -124,7 +127,9 @@ TEST(C3dFacts, Sample01HasThreeHeaderEvents) {
 }
 
 TEST(C3dFacts, Sample02HasNineHeaderEventsEightInDecInt) {
-  CSW_REQUIRE_SHARED_DATA("c3d/c3d.org/sample_02/pc_int.c3d");
+  for (const char* f : {"pc_int.c3d", "pc_real.c3d", "dec_real.c3d", "sgi_int.c3d", "sgi_real.c3d", "dec_int.c3d"}) {
+    CSW_REQUIRE_SHARED_DATA(std::string("c3d/c3d.org/sample_02/") + f);
+  }
   for (const char* f : {"pc_int.c3d", "pc_real.c3d", "dec_real.c3d", "sgi_int.c3d", "sgi_real.c3d"}) {
     EXPECT_EQ(InfoOf(std::string("c3d.org/sample_02/") + f).events.size(), 9u) << f;
   }
@@ -216,7 +221,8 @@ TEST(C3dFacts, EmptyFileIsOneClearParseError) {
 
 TEST(C3dFacts, FloatAnalogOffsetReadWithWarning) {
   // sample_13 Dance.c3d / golfswing.c3d store ANALOG:OFFSET as float (and POINT:DATA_START 0).
-  CSW_REQUIRE_SHARED_DATA("c3d/c3d.org/sample_13/Dance.c3d");
+  CSW_REQUIRE_SHARED_DATA("c3d/c3d.org/sample_13/Dance.c3d", "c3d/c3d.org/sample_13/golfswing.c3d",
+                          "c3d/c3d.org/sample_13/Dance1.c3d");
   for (const char* f : {"Dance.c3d", "golfswing.c3d"}) {
     Take t = ReadC3d(Data(std::string("c3d.org/sample_13/") + f));
     bool warned = false;
@@ -234,7 +240,8 @@ TEST(C3dFacts, FloatAnalogOffsetReadWithWarning) {
 }
 
 TEST(C3dFacts, DamagedParameterSectionsRecovered) {
-  CSW_REQUIRE_SHARED_DATA("c3d/c3d.org/sample_18/bad_parameter_section.c3d");
+  CSW_REQUIRE_SHARED_DATA("c3d/c3d.org/sample_18/bad_parameter_section.c3d",
+                          "c3d/c3d.org/sample_22/BKINtechnologies.c3d");
   Take bad = ReadC3d(Data("c3d.org/sample_18/bad_parameter_section.c3d"));
   EXPECT_FALSE(bad.provenance.warnings.empty());
   EXPECT_EQ(bad.markers.markers(), 45);

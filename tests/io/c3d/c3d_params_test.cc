@@ -137,7 +137,7 @@ TEST(C3dParams, IntAndRealTwinsAgree) {
   for (auto [int_rel, real_rel] :
        {std::pair{"c3d/c3d.org/sample_01/Eb015pi.c3d", "c3d/c3d.org/sample_01/Eb015pr.c3d"},
         std::pair{"c3d/c3d.org/sample_02/pc_int.c3d", "c3d/c3d.org/sample_02/pc_real.c3d"}}) {
-    CSW_REQUIRE_SHARED_DATA(int_rel);
+    CSW_REQUIRE_SHARED_DATA(int_rel, real_rel);
     SCOPED_TRACE(int_rel);
     C3dReader ri(testing::SharedData(int_rel).string());
     EXPECT_EQ(ri.info().storage, "int16");

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -141,10 +142,30 @@ TEST(EafRoundTrip, MillisecondTiersAreExact) {
   EXPECT_EQ(back[0].end_s, 3.0);
   // Adjacent labels share a slot: 0.1, 0.25, 0.9, 1.5, 2.0 + 0.5 x2, 1.25 x2 + 2.5, 3.0 + 0, 1.
   const std::string xml = ReadBytes(out);
-  EXPECT_EQ(std::count(xml.begin(), xml.end(), '\n') > 0, true);
   size_t slots = 0;
   for (size_t p = xml.find("<TIME_SLOT "); p != std::string::npos; p = xml.find("<TIME_SLOT ", p + 1)) ++slots;
   EXPECT_EQ(slots, 13u);
+}
+
+// The header's DATE is the writing time in UTC, in the "+00:00" form ELAN writes.
+TEST(EafWrite, HeaderDateIsTheWritingTimeInUtc) {
+  TempDir dir;
+  const std::string out = (dir / "d.eaf").string();
+  const std::time_t before = std::time(nullptr);
+  WriteEaf(out, {LabelTier{"t", LabelTier::Kind::kInterval, 0, 1, {{0, 1, "x"}}}});
+  const std::time_t after = std::time(nullptr);
+  const std::string xml = ReadBytes(out);
+  const size_t p = xml.find("DATE=\"");
+  ASSERT_NE(p, std::string::npos) << xml;
+  const std::string date = xml.substr(p + 6, xml.find('"', p + 6) - (p + 6));
+  auto stamp = [](std::time_t t) {
+    std::tm tm{};
+    gmtime_r(&t, &tm);
+    char buf[40];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S+00:00", &tm);
+    return std::string(buf);
+  };
+  EXPECT_TRUE(date == stamp(before) || date == stamp(after)) << date;
 }
 
 TEST(EafWrite, RejectsBadTimes) {
