@@ -924,6 +924,20 @@ void SaveModelFileLocked(const std::string& path, const ModelFile& models) {
   const Where& where = c.where();
   TempFile temp{ModelFileTempPath(path)};
   {
+    // The caller holds the writer lock: temporary files of other processes
+    // are left by killed writers.
+    const fs::path p(path);
+    const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    const std::string prefix = "." + p.filename().string() + ".csw-tmp.";
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.compare(0, prefix.size(), prefix) == 0 && e.path() != fs::path(temp.path) && e.is_regular_file(ec)) {
+        fs::remove(e.path(), ec);
+      }
+    }
+  }
+  {
     Handle fapl = FileAccessList(where);
     Handle file = h5::Own(H5Fcreate(temp.path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose, where,
                           "cannot create the temporary file", temp.path);

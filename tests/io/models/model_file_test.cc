@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -650,6 +651,53 @@ TEST(ModelFile, ConcurrentUpdateOfTheSameFileIsRefusedWithTheLockMessage) {
   expected.head = all.head;
   expected.hand = all.hand;
   ExpectSameFile(expected, LoadModelFile(path));
+}
+
+// kill -9 of a process saving the same model file over and over: the file
+// always loads as one of the two saved states, and the next save removes the
+// killed writer's temporary file.
+TEST(ModelFile, SigkillDuringRepeatedSavesLeavesOneCompleteFile) {
+  TempDir dir;
+  const std::string path = (dir / "m.h5").string();
+  const ModelFile all = MakeAll();
+  ModelFile a;
+  a.head = all.head;
+  ModelFile b = all;
+  SaveModelFile(path, a);
+  pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    try {
+      for (int i = 0;; ++i) SaveModelFile(path, i % 2 == 0 ? b : a);
+    } catch (...) {
+    }
+    _exit(3);
+  }
+  // Kill it after it has replaced the file several times (new inode per save).
+  int saves_seen = 0;
+  ino_t last = 0;
+  for (int i = 0; i < 4000 && saves_seen < 6; ++i) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0 && st.st_ino != last) {
+      last = st.st_ino;
+      ++saves_seen;
+    }
+    usleep(1000 + (i % 7) * 300);
+  }
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+  ASSERT_GE(saves_seen, 3) << "the child did not save";
+  const ModelFile back = LoadModelFile(path);
+  if (back.hand) {
+    ExpectSameFile(b, back);
+  } else {
+    ExpectSameFile(a, back);
+  }
+  SaveModelFile(path, a);
+  EXPECT_EQ(DirEntries(dir.path()), std::vector<std::string>{"m.h5"});
+  ExpectSameFile(a, LoadModelFile(path));
 }
 
 TEST(ModelFile, InconsistentModelIsRejectedBeforeWriting) {
