@@ -179,6 +179,30 @@ TEST(CorpusV2, TierOnlyCommitsNeverTouchTheMarkersFileAndTheIndexStaysSmall) {
   EXPECT_LT(fs::file_size(path), 64u * 1024);
   // The superseded tiers files were collected: data, tiers, audio.
   EXPECT_EQ(FolderFiles(path).size(), 3u);
+  // Audio changes and removing or adding another take leave it alone too.
+  {
+    Audio mono;
+    mono.rate_hz = 8000;
+    mono.samples = {0.5f, -0.5f};
+    CorpusTransaction tx(path);
+    tx.WriteAudio("t", mono, "new.wav");
+    tx.WriteTake(MakeFullTake("other", 10, 2));
+    tx.Commit();
+  }
+  {
+    CorpusTransaction tx(path);
+    tx.RemoveTake("other");
+    tx.Commit();
+  }
+  ASSERT_EQ(stat(data.c_str(), &after), 0);
+  EXPECT_EQ(after.st_ino, before.st_ino);
+  EXPECT_EQ(after.st_mtim.tv_nsec, before.st_mtim.tv_nsec);
+  EXPECT_EQ(Bytes(data), bytes_before);
+  EXPECT_EQ(Corpus::Open(path).LoadTake("t").audio.samples, (std::vector<float>{0.5f, -0.5f}));
+  t.audio.rate_hz = 8000;
+  t.audio.channels = 1;
+  t.audio.samples = {0.5f, -0.5f};
+  t.audio_path = "new.wav";
   Take back = Corpus::Open(path).LoadTake("t");
   Take expected = t;
   expected.tiers = {tier, t.tiers[1]};
