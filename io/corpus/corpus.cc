@@ -1007,7 +1007,8 @@ struct CorpusTransaction::Impl {
   bool committed = false;
 
   ~Impl() {
-    if (!committed) {
+    // Without the lock (another writer holds it) nothing here is ours.
+    if (!committed && writer_lock) {
       for (const std::string& f : created) ::unlink(Abs(f).c_str());
       ::unlink(temp.c_str());
     }

@@ -516,6 +516,24 @@ TEST(Corpus, SecondConcurrentTransactionIsRefused) {
   EXPECT_NE(message.find(path), std::string::npos) << message;
 }
 
+// The refused transaction must not touch the first one's files (its new take
+// files, its temporary index): the first one still commits everything.
+TEST(Corpus, RefusedTransactionLeavesTheWritersFilesAlone) {
+  TempDir dir;
+  const std::string path = (dir / "c.h5").string();
+  WriteCorpus(path, {MakeFullTake("a", 20, 2)});
+  CorpusTransaction first(path);
+  Take b = MakeFullTake("b", 30, 3);
+  first.WriteTake(b);
+  std::ofstream(CorpusTransaction::TempPath(path)) << "stand-in for the writer's temporary index";
+  EXPECT_THROW(CorpusTransaction second(path), IoError);
+  EXPECT_TRUE(fs::exists(CorpusTransaction::TempPath(path)));
+  first.Commit();
+  Corpus corpus = Corpus::Open(path);
+  ASSERT_EQ(corpus.Takes().size(), 2u);
+  ExpectSameTake(b, corpus.LoadTake("b"));
+}
+
 TEST(Corpus, ReadersAndAWriterInDifferentThreads) {
   TempDir dir;
   const std::string path = (dir / "c.h5").string();
