@@ -1,7 +1,11 @@
 // Throughput of the HDF5 corpus store: streaming 60,000 frames × 113 markers
 // into a new corpus (transaction, chunked writes, shuffle + deflate, commit with
-// fsync), and reading a 1,000-frame window back.
+// fsync), and reading a 1,000-frame window back. Format version 2: the cost of
+// a commit that replaces one take in a ~20 MB and in a >= 2 GB corpus (should
+// be the same), and of a tier-only commit on a 10-minute take. (The corpus
+// sizes are ~39 MB and ~3.9 GB: see the corpus_MB counter.)
 #include <benchmark/benchmark.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdint>
@@ -68,6 +72,13 @@ fs::path BenchDir() {
   return dir;
 }
 
+// Bytes of a corpus: the index and its folder of take files (format version 2).
+uint64_t FolderBytes(const std::string& corpus) {
+  uint64_t total = fs::file_size(corpus);
+  for (const auto& e : fs::directory_iterator(csw::CorpusTransaction::FolderPath(corpus))) total += e.file_size();
+  return total;
+}
+
 void BM_StreamTakeIntoCorpus(benchmark::State& state) {
   const std::vector<float>& data = CaptureData();
   const int64_t block = state.range(0);
@@ -76,6 +87,7 @@ void BM_StreamTakeIntoCorpus(benchmark::State& state) {
   const double cpu_start = ProcessCpuSeconds();
   for (auto _ : state) {
     fs::remove(path);
+    fs::remove_all(csw::CorpusTransaction::FolderPath(path));
     csw::CorpusTransaction tx(path);
     csw::CorpusTransaction::TakeWriter w = tx.BeginTake(Header("take"));
     for (int64_t f = 0; f < kFrames; f += block) {
@@ -91,8 +103,8 @@ void BM_StreamTakeIntoCorpus(benchmark::State& state) {
   state.counters["MB_per_cpu_s"] = bytes * static_cast<double>(state.iterations()) / 1e6 / cpu_seconds;
   state.SetBytesProcessed(static_cast<int64_t>(bytes) * state.iterations());
   state.counters["MB_per_s"] = benchmark::Counter(bytes / 1e6, benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["file_MB"] = static_cast<double>(fs::file_size(path)) / 1e6;
-  state.counters["ratio"] = bytes / static_cast<double>(fs::file_size(path));
+  state.counters["file_MB"] = static_cast<double>(FolderBytes(path)) / 1e6;
+  state.counters["ratio"] = bytes / static_cast<double>(FolderBytes(path));
   fs::remove_all(dir);
 }
 BENCHMARK(BM_StreamTakeIntoCorpus)
@@ -123,6 +135,141 @@ void BM_LoadMarkersWindow(benchmark::State& state) {
   fs::remove_all(dir);
 }
 BENCHMARK(BM_LoadMarkersWindow)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+// ---------------------------------------------------------------------------
+// Format version 2: commits cost what changed.
+
+constexpr int64_t kLabMarkers = 60;
+constexpr double kLabRate = 120.0;
+
+// Random-walk trajectories (0.01 mm quantized steps of about 0.3 mm per frame,
+// like slow facial markers) with 1 % missing samples: compresses about as real
+// captures do, unlike smooth synthetic curves.
+std::vector<float> RandomWalk(int64_t frames, uint32_t seed) {
+  std::vector<float> d(static_cast<size_t>(frames * kLabMarkers * 3));
+  std::vector<double> pos(static_cast<size_t>(kLabMarkers * 3));
+  uint32_t state = seed;
+  auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<double>(state >> 8) / 16777216.0;
+  };
+  for (size_t i = 0; i < pos.size(); ++i) pos[i] = 1000.0 * next();
+  for (int64_t f = 0; f < frames; ++f) {
+    for (int64_t m = 0; m < kLabMarkers; ++m) {
+      float* p = &d[static_cast<size_t>((f * kLabMarkers + m) * 3)];
+      const bool missing = next() < 0.01;
+      for (int k = 0; k < 3; ++k) {
+        double& x = pos[static_cast<size_t>(m * 3 + k)];
+        x += (next() - 0.5) * 0.6;
+        p[k] = missing ? std::nanf("") : static_cast<float>(std::round(x * 100.0) / 100.0);
+      }
+    }
+  }
+  return d;
+}
+
+csw::Take LabHeader(const std::string& name) {
+  csw::Take t;
+  t.name = name;
+  t.rate_hz = kLabRate;
+  for (int64_t m = 0; m < kLabMarkers; ++m) t.marker_names.push_back("M" + std::to_string(m));
+  return t;
+}
+
+// Frames of a big take: 100,000 frames × 60 markers (14 min at 120 Hz), a ~39 MB data file.
+constexpr int64_t kBigTakeFrames = 100000;
+// The take each BM_OneTakeCommit iteration replaces: one minute.
+constexpr int64_t kCommitFrames = 7200;
+
+const std::vector<float>& BigTakeData() {
+  static const std::vector<float> d = RandomWalk(kBigTakeFrames, 7);
+  return d;
+}
+
+void WriteBigTake(csw::CorpusTransaction& tx, const std::string& name) {
+  csw::CorpusTransaction::TakeWriter w = tx.BeginTake(LabHeader(name));
+  w.AppendFrames(BigTakeData().data(), kBigTakeFrames);
+  w.Finish();
+}
+
+// A corpus of `takes` big takes (~39 MB each: 1 take ≈ 39 MB, 100 takes ≈ 3.9 GB) plus the
+// one-minute take the benchmark replaces, built once and kept in /tmp
+// (csw_bench_corpus_<takes>/corpus.h5) for later runs.
+std::string CachedCorpus(int takes) {
+  const fs::path dir = fs::temp_directory_path() / ("csw_bench_corpus_" + std::to_string(takes));
+  const std::string path = (dir / "corpus.h5").string();
+  std::error_code ec;
+  if (fs::exists(path, ec)) {
+    try {
+      if (csw::Corpus::Open(path).Takes().size() == static_cast<size_t>(takes) + 1) return path;
+    } catch (const std::exception&) {
+    }
+  }
+  fs::remove_all(dir, ec);
+  fs::create_directories(dir);
+  csw::CorpusTransaction tx(path);
+  for (int i = 0; i < takes; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "take%03d", i);
+    WriteBigTake(tx, name);
+  }
+  csw::Take header = LabHeader("zz_edited");
+  csw::CorpusTransaction::TakeWriter w = tx.BeginTake(header);
+  static const std::vector<float> small = RandomWalk(kCommitFrames, 11);
+  w.AppendFrames(small.data(), kCommitFrames);
+  w.Finish();
+  tx.Commit();
+  return path;
+}
+
+// One transaction that replaces one one-minute take, then commits.
+void BM_OneTakeCommit(benchmark::State& state) {
+  const std::string path = CachedCorpus(static_cast<int>(state.range(0)));
+  static const std::vector<float> data = RandomWalk(kCommitFrames, 11);
+  for (auto _ : state) {
+    csw::CorpusTransaction tx(path);
+    csw::CorpusTransaction::TakeWriter w = tx.BeginTake(LabHeader("zz_edited"), csw::IfTakeExists::kReplace);
+    w.AppendFrames(data.data(), kCommitFrames);
+    w.Finish();
+    tx.Commit();
+  }
+  state.counters["corpus_MB"] = static_cast<double>(FolderBytes(path)) / 1e6;
+  state.counters["index_KB"] = static_cast<double>(fs::file_size(path)) / 1e3;
+}
+BENCHMARK(BM_OneTakeCommit)->Arg(1)->Arg(100)->ArgName("big_takes")->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Autosave of a phone tier (6000 labels) on a 10-minute take (120 Hz × 600 s
+// × 60 markers): a new tiers file and a new index, nothing else.
+void BM_TierOnlyCommit(benchmark::State& state) {
+  fs::path dir = BenchDir();
+  const std::string path = (dir / "tiers.h5").string();
+  constexpr int64_t kFrames10Min = 72000;
+  {
+    csw::CorpusTransaction tx(path);
+    csw::CorpusTransaction::TakeWriter w = tx.BeginTake(LabHeader("session"));
+    const std::vector<float> data = RandomWalk(kFrames10Min, 3);
+    w.AppendFrames(data.data(), kFrames10Min);
+    w.Finish();
+    tx.Commit();
+  }
+  csw::LabelTier phones;
+  phones.name = "phones";
+  phones.end_s = 600.0;
+  const char* symbols[] = {"a", "ʁ", "é", "ɔ̃", "s", "t", "m", "i", "u", "ɛ"};
+  for (int i = 0; i < 6000; ++i) phones.labels.push_back({i * 0.1, (i + 1) * 0.1, symbols[i % 10]});
+  int edit = 0;
+  for (auto _ : state) {
+    phones.labels[static_cast<size_t>(edit % 6000)].text = "e" + std::to_string(edit);
+    ++edit;
+    csw::CorpusTransaction tx(path);
+    tx.WriteTiers("session", {phones});
+    tx.Commit();
+  }
+  state.counters["take_MB"] = static_cast<double>(FolderBytes(path)) / 1e6;
+  state.counters["index_KB"] = static_cast<double>(fs::file_size(path)) / 1e3;
+  fs::remove_all(dir);
+}
+BENCHMARK(BM_TierOnlyCommit)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

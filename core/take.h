@@ -120,6 +120,9 @@ struct Take {
   Audio audio;             // empty when none
   std::string audio_path;  // reference to the source WAV, when any
   Provenance provenance;
+  // The marker-set definition (JSON text) given at import, "" when none; the
+  // corpus keeps it with the take (attribute "markerset").
+  std::string markerset_json;
 
   int64_t frames() const { return markers.frames(); }
   double duration_s() const { return rate_hz > 0 ? static_cast<double>(frames()) / rate_hz : 0.0; }

@@ -5,7 +5,7 @@ set -euo pipefail
 pkgs=(
   build-essential cmake ninja-build ccache pkg-config git
   libeigen3-dev libceres-dev libopencv-dev
-  libhdf5-dev hdf5-tools libdeflate-dev
+  libhdf5-dev hdf5-tools libdeflate-dev python3-h5py
   libespeak-ng-dev espeak-ng-data libsndfile1-dev sox
   nlohmann-json3-dev libssl-dev libpugixml-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev

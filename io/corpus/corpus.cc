@@ -8,16 +8,26 @@
 #include <algorithm>
 #include <atomic>
 #include <bit>
+#include <cctype>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <filesystem>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <random>
+#include <set>
 #include <system_error>
 #include <thread>
 
 #include "core/error.h"
+#include "core/file_util.h"
+#include "core/progress.h"
+#include "io/corpus/corpus_testing.h"
 #include "io/corpus/hdf5_util.h"
 
 #ifndef CSW_VERSION
@@ -61,15 +71,6 @@ struct CompressorDeleter {
 
 ParseError Damaged(const Where& where, const std::string& what) {
   return ParseError({where.file, std::nullopt, std::nullopt}, what);
-}
-
-std::string NowUtc() {
-  std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
 }
 
 std::string Errno() { return std::strerror(errno); }
@@ -138,8 +139,57 @@ Handle OpenHdf5(const std::string& file, unsigned flags, const Where& where) {
   return Handle(id, H5Fclose);
 }
 
-// Checks the root attributes and the shape of every take.
-void ValidateCorpus(hid_t file, const Where& where) {
+// Where an external link points.
+struct LinkTarget {
+  bool external = false;
+  std::string file;    // as stored in the link, e.g. "corpus.h5.d/take01-….h5"
+  std::string object;  // path inside that file
+};
+
+LinkTarget LinkTargetOf(hid_t group, const std::string& name) {
+  LinkTarget t;
+  H5L_info_t info;
+  if (H5Lget_info(group, name.c_str(), &info, H5P_DEFAULT) < 0) {
+    H5Eclear2(H5E_DEFAULT);
+    return t;
+  }
+  if (info.type != H5L_TYPE_EXTERNAL) return t;
+  std::vector<char> buf(info.u.val_size + 1, '\0');
+  const char* file = nullptr;
+  const char* object = nullptr;
+  unsigned flags = 0;
+  if (H5Lget_val(group, name.c_str(), buf.data(), info.u.val_size, H5P_DEFAULT) < 0 ||
+      H5Lunpack_elink_val(buf.data(), info.u.val_size, &flags, &file, &object) < 0 || file == nullptr ||
+      object == nullptr) {
+    H5Eclear2(H5E_DEFAULT);
+    return t;
+  }
+  t.external = true;
+  t.file = file;
+  t.object = object;
+  return t;
+}
+
+// A file named by an external link of the corpus at corpus_path: relative
+// names are relative to the corpus file's folder (as HDF5 resolves them).
+std::string InCorpusDir(const std::string& corpus_path, const std::string& rel) {
+  if (fs::path(rel).is_absolute()) return rel;
+  fs::path dir = fs::path(corpus_path).parent_path();
+  return (dir.empty() ? fs::path(rel) : dir / rel).string();
+}
+
+IoError MissingTakeFile(const std::string& corpus, const std::string& take, const std::string& rel) {
+  std::string folder = fs::path(rel).parent_path().string();
+  if (folder.empty()) folder = rel;
+  return IoError(corpus, "take '" + take + "': its file " + rel + " is missing; the folder " + folder +
+                             " must stay beside " + fs::path(corpus).filename().string() +
+                             " (use csw pack to send one file)");
+}
+
+// Checks the root attributes and every take: the shape of markers stored in
+// this file, and that every file an external link names exists. Appends the
+// files the links name to `referenced`.
+void ValidateCorpus(hid_t file, const Where& where, std::vector<std::string>* referenced) {
   auto format = h5::ReadAttrString(file, "format", where, "/");
   if (!format) throw Damaged(where, "not a csw corpus: the root group has no 'format' attribute");
   if (*format != kFormatName) throw Damaged(where, "not a csw corpus: format is '" + *format + "'");
@@ -160,6 +210,21 @@ void ValidateCorpus(hid_t file, const Where& where) {
     Handle group(gid, H5Gclose);
     if (!h5::LinkExists(group.get(), "markers")) throw Damaged(where, prefix + obj + "/markers is missing");
     if (!h5::LinkExists(group.get(), "marker_names")) throw Damaged(where, prefix + obj + "/marker_names is missing");
+    bool markers_linked = false;
+    std::string last;
+    for (const std::string& member : h5::LinkNames(group.get(), where, obj)) {
+      LinkTarget target = LinkTargetOf(group.get(), member);
+      if (!target.external) continue;
+      if (member == "markers") markers_linked = true;
+      if (target.file == last) continue;
+      last = target.file;
+      std::error_code ec;
+      if (!fs::exists(InCorpusDir(where.file, target.file), ec)) throw MissingTakeFile(where.file, name, target.file);
+      if (referenced != nullptr) referenced->push_back(target.file);
+    }
+    // Markers in another file are checked when they are read (LoadTake); the
+    // index caches their shape.
+    if (markers_linked) continue;
     hid_t did = H5Dopen2(group.get(), "markers", H5P_DEFAULT);
     if (did < 0)
       throw Damaged(where, prefix + obj + "/markers is not a readable dataset (" + h5::TakeErrorMessage() + ")");
@@ -184,7 +249,6 @@ void ValidateCorpus(hid_t file, const Where& where) {
     }
   }
 }
-
 struct DecompressorDeleter {
   void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }
 };
@@ -494,6 +558,20 @@ TakeSummary SummarizeTake(hid_t file, const std::string& name, const Where& wher
   TakeSummary s;
   s.name = name;
   s.rate_hz = h5::ReadAttrDouble(g.get(), "rate_hz", where, obj).value_or(0.0);
+  s.has_markerset = !h5::ReadAttrString(g.get(), "markerset", where, obj).value_or("").empty();
+  // A version-2 index caches the summary, so that listing takes opens no take file.
+  const hid_t gid = g.get();
+  if (h5::AttrExists(gid, "frame_count") && h5::AttrExists(gid, "marker_count") && h5::AttrExists(gid, "gap_count") &&
+      h5::AttrExists(gid, "has_audio") && h5::AttrExists(gid, "analog_channels")) {
+    s.frames = h5::ReadAttrInt(gid, "frame_count", where, obj).value_or(0);
+    s.markers = h5::ReadAttrInt(gid, "marker_count", where, obj).value_or(0);
+    s.gaps = h5::ReadAttrInt(gid, "gap_count", where, obj).value_or(0);
+    s.has_audio = h5::ReadAttrInt(gid, "has_audio", where, obj).value_or(0) != 0;
+    s.analog_channels = h5::ReadAttrInt(gid, "analog_channels", where, obj).value_or(0);
+    s.tier_names = h5::ReadAttrStrings(gid, "tier_names", where, obj);
+    s.duration_s = s.rate_hz > 0 ? static_cast<double>(s.frames) / s.rate_hz : 0.0;
+    return s;
+  }
   Handle markers = h5::OpenDataset(g.get(), "markers", where, obj + "/markers");
   MarkerShape shape = ShapeOfMarkers(markers.get(), where, obj + "/markers");
   s.frames = shape.frames;
@@ -547,6 +625,7 @@ Take ReadTake(hid_t file, const std::string& name, const Where& where) {
   t.rate_hz = h5::ReadAttrDouble(g.get(), "rate_hz", where, obj).value_or(0.0);
   t.first_frame = h5::ReadAttrInt(g.get(), "first_frame", where, obj).value_or(1);
   t.source_units = h5::ReadAttrString(g.get(), "source_units", where, obj).value_or("mm");
+  t.markerset_json = h5::ReadAttrString(g.get(), "markerset", where, obj).value_or("");
   t.marker_names = h5::ReadStrings(g.get(), "marker_names", where, obj + "/marker_names");
   {
     Handle markers = h5::OpenDataset(g.get(), "markers", where, obj + "/markers");
@@ -631,34 +710,160 @@ Take ReadTake(hid_t file, const std::string& name, const Where& where) {
   return t;
 }
 
-void WriteRootAttributes(hid_t file, const Where& where) {
+void WriteRootAttributes(hid_t file, const std::string& layout, const Where& where) {
   h5::WriteAttr(file, "format", std::string(kFormatName), where, "/");
   h5::WriteAttr(file, "format_version", int64_t{kCorpusFormatVersion}, where, "/");
   h5::WriteAttr(file, "csw_version", std::string(CSW_VERSION), where, "/");
+  h5::WriteAttr(file, "layout", layout, where, "/");
 }
 
-Handle CreateCorpusFile(const std::string& file, const Where& where) {
+Handle CreateHdf5(const std::string& file, const Where& where) {
   Handle fapl = FileAccessList(where);
-  Handle f = h5::Own(H5Fcreate(file.c_str(), H5F_ACC_EXCL, H5P_DEFAULT, fapl.get()), H5Fclose, where,
-                     "cannot create the temporary corpus file", file);
-  WriteRootAttributes(f.get(), where);
-  return f;
+  return h5::Own(H5Fcreate(file.c_str(), H5F_ACC_EXCL, H5P_DEFAULT, fapl.get()), H5Fclose, where, "cannot create",
+                 file);
 }
 
-std::string LockPath(const std::string& corpus_path) {
-  fs::path p(corpus_path);
-  return (p.parent_path() / ("." + p.filename().string() + ".csw-lock")).string();
+// ---------------------------------------------------------------------------
+// Readers: a read lock that other processes' writers see, and the files the
+// live Corpus objects of this process reference.
+
+struct ReaderState {
+  pid_t pid = 0;
+  int fd = -1;  // one fd per corpus and process: closing any fd of a file drops its fcntl locks
+  int readers = 0;
+  std::map<std::string, int> files;
+};
+
+std::mutex& RegistryMutex() {
+  static std::mutex m;
+  return m;
+}
+
+std::map<std::string, ReaderState>& Registry() {
+  static auto* r = new std::map<std::string, ReaderState>();
+  return *r;
+}
+
+std::string RegistryKey(const std::string& path) {
+  std::error_code ec;
+  fs::path p = fs::absolute(path, ec);
+  return (ec ? fs::path(path) : p).lexically_normal().string();
+}
+
+std::string ReadersLockPath(const std::string& corpus_path) { return HiddenSibling(corpus_path, ".csw-readers"); }
+
+// Held by every Corpus: a shared fcntl lock on ".<name>.csw-readers" (taken
+// before the index is opened) and the list of files its index references.
+class ReaderRegistration {
+ public:
+  explicit ReaderRegistration(const std::string& corpus_path) : key_(RegistryKey(corpus_path)) {
+    std::lock_guard<std::mutex> guard(RegistryMutex());
+    ReaderState& st = Registry()[key_];
+    if (st.pid != ::getpid()) {
+      // New, or inherited across fork(): fcntl locks are not inherited.
+      if (st.fd >= 0) ::close(st.fd);
+      st = ReaderState{};
+      st.pid = ::getpid();
+    }
+    if (st.fd < 0) {
+      const std::string lock_path = ReadersLockPath(corpus_path);
+      st.fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+      if (st.fd < 0) st.fd = ::open(lock_path.c_str(), O_RDONLY | O_CLOEXEC);  // read-only folder: no writer
+      if (st.fd >= 0) {
+        struct flock fl {};
+        fl.l_type = F_RDLCK;
+        fl.l_whence = SEEK_SET;
+        ::fcntl(st.fd, F_SETLK, &fl);
+      }
+    }
+    ++st.readers;
+  }
+  ReaderRegistration(const ReaderRegistration&) = delete;
+  ReaderRegistration& operator=(const ReaderRegistration&) = delete;
+
+  void Register(std::vector<std::string> files) {
+    std::lock_guard<std::mutex> guard(RegistryMutex());
+    ReaderState& st = Registry()[key_];
+    for (const std::string& f : files) ++st.files[f];
+    files_ = std::move(files);
+  }
+
+  ~ReaderRegistration() {
+    std::lock_guard<std::mutex> guard(RegistryMutex());
+    auto it = Registry().find(key_);
+    if (it == Registry().end() || it->second.pid != ::getpid()) return;
+    ReaderState& st = it->second;
+    for (const std::string& f : files_) {
+      auto fi = st.files.find(f);
+      if (fi != st.files.end() && --fi->second <= 0) st.files.erase(fi);
+    }
+    if (--st.readers <= 0) {
+      if (st.fd >= 0) ::close(st.fd);
+      Registry().erase(it);
+    }
+  }
+
+ private:
+  std::string key_;
+  std::vector<std::string> files_;
+};
+
+// True when another process holds a Corpus of corpus_path open.
+bool OtherProcessReads(const std::string& corpus_path) {
+  std::lock_guard<std::mutex> guard(RegistryMutex());
+  int fd = -1;
+  bool own_fd = false;
+  auto it = Registry().find(RegistryKey(corpus_path));
+  if (it != Registry().end() && it->second.pid == ::getpid() && it->second.fd >= 0) {
+    fd = it->second.fd;
+  } else {
+    // This process holds no lock on the file, so closing this fd drops none.
+    fd = ::open(ReadersLockPath(corpus_path).c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return false;
+    own_fd = true;
+  }
+  struct flock fl {};
+  fl.l_type = F_WRLCK;
+  fl.l_whence = SEEK_SET;
+  const bool busy = ::fcntl(fd, F_GETLK, &fl) != 0 || fl.l_type != F_UNLCK;
+  if (own_fd) ::close(fd);
+  return busy;
+}
+
+// Files referenced by the live Corpus objects of this process.
+std::set<std::string> FilesInUseHere(const std::string& corpus_path) {
+  std::lock_guard<std::mutex> guard(RegistryMutex());
+  std::set<std::string> out;
+  auto it = Registry().find(RegistryKey(corpus_path));
+  if (it == Registry().end() || it->second.pid != ::getpid()) return out;
+  for (const auto& [f, n] : it->second.files) out.insert(f);
+  return out;
+}
+
+std::function<void(const char*)>& CommitHook() {
+  static std::function<void(const char*)> hook;
+  return hook;
+}
+
+void RunHook(const char* stage) {
+  if (CommitHook()) CommitHook()(stage);
 }
 
 }  // namespace
+
+namespace corpus_testing {
+void SetCommitHook(std::function<void(const char* stage)> hook) { CommitHook() = std::move(hook); }
+}  // namespace corpus_testing
 
 // ---------------------------------------------------------------------------
 // Corpus
 
 struct Corpus::Impl {
+  std::unique_ptr<ReaderRegistration> reader;  // first member: released after the file is closed
   std::string path;
   Where where;
   Handle file;
+  int version = 1;
 };
 
 Corpus Corpus::Open(const std::string& path) {
@@ -666,8 +871,13 @@ Corpus Corpus::Open(const std::string& path) {
   auto impl = std::make_shared<Impl>();
   impl->path = path;
   impl->where = {path};
+  std::error_code ec;
+  if (fs::is_regular_file(path, ec)) impl->reader = std::make_unique<ReaderRegistration>(path);
   impl->file = OpenHdf5(path, H5F_ACC_RDONLY, impl->where);
-  ValidateCorpus(impl->file.get(), impl->where);
+  std::vector<std::string> files;
+  ValidateCorpus(impl->file.get(), impl->where, &files);
+  impl->version = static_cast<int>(h5::ReadAttrInt(impl->file.get(), "format_version", impl->where, "/").value_or(1));
+  if (impl->reader) impl->reader->Register(std::move(files));
   return Corpus(std::move(impl));
 }
 
@@ -698,6 +908,14 @@ Take Corpus::LoadTake(const std::string& name) const {
   return ReadTake(impl_->file.get(), name, impl_->where);
 }
 
+std::string Corpus::TakeMarkerSet(const std::string& take) const {
+  auto lock = h5::Lock();
+  Handle g = OpenTakeGroup(impl_->file.get(), take, impl_->where);
+  return h5::ReadAttrString(g.get(), "markerset", impl_->where, TakeObject(take)).value_or("");
+}
+
+int Corpus::format_version() const { return impl_->version; }
+
 MarkerArray Corpus::LoadMarkers(const std::string& take, int64_t first, int64_t count) const {
   auto lock = h5::Lock();
   const std::string obj = TakeObject(take) + "/markers";
@@ -718,72 +936,322 @@ std::string Corpus::path() const { return impl_->path; }
 // ---------------------------------------------------------------------------
 // CorpusTransaction
 
+namespace {
+
+// One take of the transaction's table: what the index will say about it.
+struct TakeEntry {
+  double rate_hz = 0.0;
+  int64_t first_frame = 1;
+  std::string source_units = "mm";
+  std::string imported_utc;
+  std::string csw_version;
+  std::string markerset;
+  int64_t frames = 0;
+  int64_t markers = 0;
+  int64_t gaps = 0;
+  bool has_audio = false;
+  int64_t analog_channels = 0;
+  std::vector<std::string> tier_names;
+  // Files, as the links name them (relative to the corpus folder).
+  std::string data_file;
+  std::vector<std::string> data_members;  // links into data_file: markers, marker_names, analog, events, provenance
+  std::string tiers_file;
+  std::string audio_file;  // empty: no audio group
+  bool writing = false;
+};
+
+void WriteTakeAttrs(hid_t g, const TakeEntry& e, const Where& where, const std::string& obj) {
+  h5::WriteAttr(g, "rate_hz", e.rate_hz, where, obj);
+  h5::WriteAttr(g, "first_frame", e.first_frame, where, obj);
+  h5::WriteAttr(g, "source_units", e.source_units, where, obj);
+  h5::WriteAttr(g, "imported_utc", e.imported_utc, where, obj);
+  h5::WriteAttr(g, "csw_version", e.csw_version, where, obj);
+  h5::WriteAttr(g, "markerset", e.markerset, where, obj);
+}
+
+void WriteSummaryAttrs(hid_t g, const TakeEntry& e, const Where& where, const std::string& obj) {
+  h5::WriteAttr(g, "frame_count", e.frames, where, obj);
+  h5::WriteAttr(g, "marker_count", e.markers, where, obj);
+  h5::WriteAttr(g, "gap_count", e.gaps, where, obj);
+  h5::WriteAttr(g, "has_audio", int64_t{e.has_audio ? 1 : 0}, where, obj);
+  h5::WriteAttr(g, "analog_channels", e.analog_channels, where, obj);
+  h5::WriteAttr(g, "tier_names", e.tier_names, where, obj);
+}
+
+std::string UniqueToken() {
+  static std::atomic<uint64_t> counter{0};
+  std::random_device rd;
+  uint64_t r = (static_cast<uint64_t>(rd()) << 32) ^ rd();
+  r ^= static_cast<uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count()) * 0x9E3779B97F4A7C15ull;
+  r += (static_cast<uint64_t>(::getpid()) << 40) + counter.fetch_add(1);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(r));
+  return buf;
+}
+
+constexpr const char* kDataMembers[] = {"markers", "marker_names", "analog", "events", "provenance"};
+
+}  // namespace
+
 struct CorpusTransaction::Impl {
+  std::unique_ptr<WriterLock> writer_lock;  // first member: released last
   std::string path;
   std::string temp;
+  std::string folder_rel;  // "<name>.d"
+  std::string folder_abs;
   Where where;
-  int lock_fd = -1;
-  bool temp_created = false;
-  Handle file;
+  std::map<std::string, TakeEntry> takes;
+  std::set<std::string> created;  // files this transaction made and still owns
+  bool copy_reserved = false;     // /models or /dictionaries of the old corpus are not empty
   int open_writers = 0;
   bool committed = false;
-  bool freed_space = false;  // something was deleted: maybe compact on commit
 
   ~Impl() {
-    if (!committed) {
-      auto lock = h5::Lock();
-      file.Reset();
-      if (temp_created) ::unlink(temp.c_str());
+    // Without the lock (another writer holds it) nothing here is ours.
+    if (!committed && writer_lock) {
+      for (const std::string& f : created) ::unlink(Abs(f).c_str());
+      ::unlink(temp.c_str());
     }
-    if (lock_fd >= 0) ::close(lock_fd);  // releases the flock
   }
+
+  std::string Abs(const std::string& rel) const { return InCorpusDir(path, rel); }
 
   void CheckUsable() const {
     if (committed) throw Error(path + ": the transaction was already committed");
   }
 
-  Handle Takes() { return h5::OpenGroup(file.get(), "takes", where, "/takes"); }
-
-  // Compacting rewrites the whole file: only worth it when this transaction
-  // freed at least 1 MiB or an eighth of the file (smaller leftovers are
-  // reclaimed by the next compaction, which copies only live objects).
-  bool WorthCompacting() const {
-    hssize_t free_bytes = H5Fget_freespace(file.get());
-    hsize_t size = 0;
-    if (free_bytes < 0 || H5Fget_filesize(file.get(), &size) < 0) {
-      h5::TakeErrorMessage();
-      return true;
+  TakeEntry& Entry(const std::string& name) {
+    auto it = takes.find(name);
+    if (name.empty() || name.find('/') != std::string::npos || it == takes.end()) {
+      throw InvalidInput(path + ": no take named '" + name + "'");
     }
-    return free_bytes >= (hssize_t{1} << 20) || static_cast<hsize_t>(free_bytes) * 8 >= size;
+    return it->second;
   }
 
-  // Rewrites the temporary file object by object so that the space of deleted
-  // takes is not carried along forever.
-  void Compact();
+  // Creates a new, uniquely named HDF5 file in the folder, owned by the transaction.
+  Handle NewFile(const std::string& take, const std::string& suffix, const std::string& format, std::string* rel) {
+    std::error_code ec;
+    if (!fs::is_directory(folder_abs, ec)) {
+      fs::create_directories(folder_abs, ec);
+      if (ec) throw IoError(path, "cannot create the folder " + folder_abs + ": " + ec.message());
+      fs::path dir = fs::path(folder_abs).parent_path();
+      FsyncPath(dir.empty() ? std::string(".") : dir.string(), true, path);
+    }
+    std::string safe;
+    for (unsigned char c : take) safe += (std::isalnum(c) != 0 || c == '-' || c == '_') ? static_cast<char>(c) : '_';
+    if (safe.size() > 40) safe.resize(40);
+    *rel = folder_rel + "/" + safe + "-" + UniqueToken() + suffix;
+    Handle f = CreateHdf5(Abs(*rel), where);
+    created.insert(*rel);
+    h5::WriteAttr(f.get(), "format", format, where, *rel);
+    h5::WriteAttr(f.get(), "take", take, where, *rel);
+    return f;
+  }
+
+  static void Close(Handle* f, const std::string& path, const std::string& rel) {
+    if (!f->Reset()) throw IoError(path, "cannot close " + rel + ": " + h5::TakeErrorMessage());
+  }
+
+  // Deletes a file of this transaction that nothing will reference.
+  void Discard(const std::string& rel) {
+    if (!rel.empty() && created.erase(rel) > 0) ::unlink(Abs(rel).c_str());
+  }
+  void DiscardEntry(const TakeEntry& e) {
+    Discard(e.data_file);
+    Discard(e.tiers_file);
+    Discard(e.audio_file);
+  }
+
+  std::string WriteTiersFile(const std::string& take, const std::vector<LabelTier>& tiers) {
+    std::string rel;
+    Handle f = NewFile(take, ".tiers.h5", "csw-take-tiers", &rel);
+    WriteTierGroups(f.get(), tiers, where, TakeObject(take));
+    Close(&f, path, rel);
+    return rel;
+  }
+
+  std::string WriteAudioFile(const std::string& take, const Audio& audio, const std::string& source_path) {
+    if (audio.samples.empty() && source_path.empty()) return "";
+    std::string rel;
+    Handle f = NewFile(take, ".audio.h5", "csw-take-audio", &rel);
+    WriteAudioGroup(f.get(), audio, source_path, where, TakeObject(take));
+    Close(&f, path, rel);
+    return rel;
+  }
+
+  std::set<std::string> Referenced() const {
+    std::set<std::string> out;
+    for (const auto& [name, e] : takes) {
+      for (const std::string* f : {&e.data_file, &e.tiers_file, &e.audio_file}) {
+        if (!f->empty()) out.insert(*f);
+      }
+    }
+    return out;
+  }
+
+  void Load(Progress* progress);
+  void Extract(hid_t file, hid_t takes_group, const std::string& name, TakeEntry* e);
+  void WriteIndex();
+  void CollectGarbage(const std::set<std::string>& keep);
 };
 
-void CorpusTransaction::Impl::Compact() {
-  const std::string compact = temp + ".compact";
-  ::unlink(compact.c_str());
+void CorpusTransaction::Impl::Extract(hid_t file, hid_t takes_group, const std::string& name, TakeEntry* e) {
+  const std::string obj = TakeObject(name);
+  TakeSummary s = SummarizeTake(file, name, where);
+  e->frames = s.frames;
+  e->markers = s.markers;
+  e->gaps = s.gaps;
+  e->has_audio = s.has_audio;
+  e->analog_channels = s.analog_channels;
+  e->tier_names = s.tier_names;
+  Handle g = h5::OpenGroup(takes_group, name, where, obj);
   {
-    Handle dst = CreateCorpusFile(compact, where);
-    for (const std::string& name : h5::LinkNames(file.get(), where, "/")) {
-      h5::Check(H5Ocopy(file.get(), name.c_str(), dst.get(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT), where,
-                "cannot copy", "/" + name);
+    Handle f = NewFile(name, ".h5", "csw-take", &e->data_file);
+    WriteTakeAttrs(f.get(), *e, where, e->data_file);
+    for (const char* member : kDataMembers) {
+      if (!h5::LinkExists(g.get(), member)) continue;
+      h5::CopyTree(g.get(), member, f.get(), where, obj + "/" + member);
+      e->data_members.push_back(member);
     }
-    if (!dst.Reset()) {
-      ::unlink(compact.c_str());
-      throw IoError(path, "cannot close " + compact + ": " + h5::TakeErrorMessage());
+    Handle markers = h5::OpenDataset(f.get(), "markers", where, obj + "/markers");
+    h5::WriteAttr(markers.get(), "gaps", e->gaps, where, obj + "/markers");
+    markers.Reset();
+    Close(&f, path, e->data_file);
+  }
+  {
+    Handle f = NewFile(name, ".tiers.h5", "csw-take-tiers", &e->tiers_file);
+    if (h5::LinkExists(g.get(), "tiers")) {
+      h5::CopyTree(g.get(), "tiers", f.get(), where, obj + "/tiers");
+    } else {
+      WriteTierGroups(f.get(), {}, where, obj);
+    }
+    Close(&f, path, e->tiers_file);
+  }
+  if (h5::LinkExists(g.get(), "audio")) {
+    Handle f = NewFile(name, ".audio.h5", "csw-take-audio", &e->audio_file);
+    h5::CopyTree(g.get(), "audio", f.get(), where, obj + "/audio");
+    Close(&f, path, e->audio_file);
+  }
+}
+
+void CorpusTransaction::Impl::Load(Progress* progress) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return;
+  Corpus::Open(path);  // refuse to replace anything that is not a valid corpus
+  Handle file = OpenHdf5(path, H5F_ACC_RDONLY, where);
+  Handle tg = h5::OpenGroup(file.get(), "takes", where, "/takes");
+  const std::vector<std::string> names = h5::LinkNames(tg.get(), where, "/takes");
+  for (size_t i = 0; i < names.size(); ++i) {
+    const std::string& name = names[i];
+    const std::string obj = TakeObject(name);
+    if (progress != nullptr) progress->Update("reading the corpus", static_cast<double>(i) / names.size());
+    TakeEntry e;
+    Handle g = h5::OpenGroup(tg.get(), name, where, obj);
+    e.rate_hz = h5::ReadAttrDouble(g.get(), "rate_hz", where, obj).value_or(0.0);
+    e.first_frame = h5::ReadAttrInt(g.get(), "first_frame", where, obj).value_or(1);
+    e.source_units = h5::ReadAttrString(g.get(), "source_units", where, obj).value_or("mm");
+    e.imported_utc = h5::ReadAttrString(g.get(), "imported_utc", where, obj).value_or("");
+    e.csw_version = h5::ReadAttrString(g.get(), "csw_version", where, obj).value_or("");
+    e.markerset = h5::ReadAttrString(g.get(), "markerset", where, obj).value_or("");
+    // A take already split into files (every member an external link into its
+    // files) is kept as it is; any other (version 1, packed, edited by another
+    // tool) is copied into new files.
+    LinkTarget markers = LinkTargetOf(g.get(), "markers");
+    bool linked = markers.external;
+    for (const char* member : kDataMembers) {
+      if (!h5::LinkExists(g.get(), member)) continue;
+      LinkTarget t = LinkTargetOf(g.get(), member);
+      linked = linked && t.external && t.file == markers.file && t.object == std::string("/") + member;
+      e.data_members.push_back(member);
+    }
+    LinkTarget tiers = LinkTargetOf(g.get(), "tiers");
+    linked = linked && tiers.external && tiers.object == "/tiers";
+    LinkTarget audio;
+    if (h5::LinkExists(g.get(), "audio")) {
+      audio = LinkTargetOf(g.get(), "audio");
+      linked = linked && audio.external && audio.object == "/audio";
+    }
+    if (linked) {
+      TakeSummary s = SummarizeTake(file.get(), name, where);
+      e.frames = s.frames;
+      e.markers = s.markers;
+      e.gaps = s.gaps;
+      e.has_audio = s.has_audio;
+      e.analog_channels = s.analog_channels;
+      e.tier_names = s.tier_names;
+      e.data_file = markers.file;
+      e.tiers_file = tiers.file;
+      e.audio_file = audio.file;
+    } else {
+      e.data_members.clear();
+      Extract(file.get(), tg.get(), name, &e);
+    }
+    takes.emplace(name, std::move(e));
+  }
+  for (const char* reserved : {"models", "dictionaries"}) {
+    if (!h5::LinkExists(file.get(), reserved)) continue;
+    Handle r = h5::OpenGroup(file.get(), reserved, where, std::string("/") + reserved);
+    if (!h5::LinkNames(r.get(), where, std::string("/") + reserved).empty()) copy_reserved = true;
+  }
+  if (progress != nullptr) progress->Update("reading the corpus", 1.0);
+}
+
+void CorpusTransaction::Impl::WriteIndex() {
+  ::unlink(temp.c_str());
+  Handle f = CreateHdf5(temp, where);
+  WriteRootAttributes(f.get(), "index", where);
+  Handle tg = h5::CreateGroup(f.get(), "takes", where, "/takes");
+  for (const auto& [name, e] : takes) {
+    const std::string obj = TakeObject(name);
+    Handle g = h5::CreateGroup(tg.get(), name, where, obj);
+    WriteTakeAttrs(g.get(), e, where, obj);
+    WriteSummaryAttrs(g.get(), e, where, obj);
+    auto link = [&](const std::string& file, const std::string& member) {
+      h5::Check(
+          H5Lcreate_external(file.c_str(), ("/" + member).c_str(), g.get(), member.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+          where, "cannot link", obj + "/" + member);
+    };
+    for (const std::string& member : e.data_members) link(e.data_file, member);
+    link(e.tiers_file, "tiers");
+    if (!e.audio_file.empty()) link(e.audio_file, "audio");
+  }
+  Handle old;
+  if (copy_reserved) old = OpenHdf5(path, H5F_ACC_RDONLY, where);
+  for (const char* reserved : {"models", "dictionaries"}) {
+    if (old.valid() && h5::LinkExists(old.get(), reserved)) {
+      h5::CopyTree(old.get(), reserved, f.get(), where, std::string("/") + reserved);
+    } else {
+      h5::CreateGroup(f.get(), reserved, where, std::string("/") + reserved);
     }
   }
-  if (!file.Reset()) throw IoError(path, "cannot close " + temp + ": " + h5::TakeErrorMessage());
-  if (::rename(compact.c_str(), temp.c_str()) != 0) throw IoError(path, "cannot rename " + compact + ": " + Errno());
+  old.Reset();
+  tg.Reset();
+  h5::Check(H5Fflush(f.get(), H5F_SCOPE_GLOBAL), where, "cannot flush", temp);
+  Close(&f, path, temp);
+}
+
+// Deletes the files of the folder that `keep` does not name, unless a reader
+// may still need them: nothing while another process holds a Corpus open,
+// and never a file a live Corpus of this process references. What is left is
+// deleted by a later transaction.
+void CorpusTransaction::Impl::CollectGarbage(const std::set<std::string>& keep) {
+  std::error_code ec;
+  if (!fs::is_directory(folder_abs, ec)) return;
+  if (OtherProcessReads(path)) return;
+  const std::set<std::string> in_use = FilesInUseHere(path);
+  std::vector<fs::path> doomed;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder_abs, ec)) {
+    const std::string rel = folder_rel + "/" + entry.path().filename().string();
+    if (keep.count(rel) == 0 && created.count(rel) == 0 && in_use.count(rel) == 0) doomed.push_back(entry.path());
+  }
+  for (const fs::path& p : doomed) fs::remove(p, ec);
 }
 
 std::string CorpusTransaction::TempPath(const std::string& corpus_path) {
-  fs::path p(corpus_path);
-  return (p.parent_path() / ("." + p.filename().string() + ".csw-tmp")).string();
+  return HiddenSibling(corpus_path, ".csw-tmp");
 }
+
+std::string CorpusTransaction::FolderPath(const std::string& corpus_path) { return corpus_path + ".d"; }
 
 CorpusTransaction::CorpusTransaction(const std::string& path) : impl_(std::make_unique<Impl>()) {
   auto lock = h5::Lock();
@@ -791,80 +1259,83 @@ CorpusTransaction::CorpusTransaction(const std::string& path) : impl_(std::make_
   t.path = path;
   t.where = {path};
   t.temp = TempPath(path);
-  const std::string lock_path = LockPath(path);
-  t.lock_fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (t.lock_fd < 0) throw IoError(path, "cannot create the lock file " + lock_path + ": " + Errno());
-  if (::flock(t.lock_fd, LOCK_EX | LOCK_NB) != 0) {
-    if (errno == EWOULDBLOCK)
-      throw IoError(path, "another transaction (in this or another process) is writing this corpus (" + lock_path +
-                              " is locked)");
-    throw IoError(path, "cannot lock " + lock_path + ": " + Errno());
-  }
-  // We hold the lock: a temporary file left here belongs to a killed writer.
+  t.folder_abs = FolderPath(path);
+  t.folder_rel = fs::path(path).filename().string() + ".d";
+  t.writer_lock = std::make_unique<WriterLock>(path, "corpus");
+  // We hold the lock: a temporary index left here belongs to a killed writer.
+  std::error_code ec;
+  fs::remove(t.temp, ec);
+  fs::remove(t.temp + ".compact", ec);  // left by csw before format version 2
+  t.Load(nullptr);
+  t.CollectGarbage(t.Referenced());  // files of a killed writer, old generations no reader needs
+}
+
+CorpusTransaction::CorpusTransaction(const std::string& path, Progress& progress) : impl_(std::make_unique<Impl>()) {
+  auto lock = h5::Lock();
+  Impl& t = *impl_;
+  t.path = path;
+  t.where = {path};
+  t.temp = TempPath(path);
+  t.folder_abs = FolderPath(path);
+  t.folder_rel = fs::path(path).filename().string() + ".d";
+  t.writer_lock = std::make_unique<WriterLock>(path, "corpus");
   std::error_code ec;
   fs::remove(t.temp, ec);
   fs::remove(t.temp + ".compact", ec);
-  if (fs::exists(path, ec)) {
-    Corpus::Open(path);  // refuse to overwrite anything that is not a valid corpus
-    t.temp_created = true;
-    fs::copy_file(path, t.temp, fs::copy_options::overwrite_existing, ec);
-    if (ec) throw IoError(path, "cannot copy to " + t.temp + ": " + ec.message());
-    t.file = OpenHdf5(t.temp, H5F_ACC_RDWR, t.where);
-    h5::WriteAttr(t.file.get(), "csw_version", std::string(CSW_VERSION), t.where, "/");
-  } else {
-    t.temp_created = true;
-    t.file = CreateCorpusFile(t.temp, t.where);
-  }
-  for (const char* g : {"takes", "models", "dictionaries"}) {
-    if (!h5::LinkExists(t.file.get(), g)) h5::CreateGroup(t.file.get(), g, t.where, std::string("/") + g);
-  }
+  t.Load(&progress);
+  t.CollectGarbage(t.Referenced());
 }
 
-CorpusTransaction::~CorpusTransaction() = default;
+CorpusTransaction::~CorpusTransaction() {
+  auto lock = h5::Lock();
+  impl_.reset();
+}
 
 const std::string& CorpusTransaction::path() const { return impl_->path; }
 
 bool CorpusTransaction::HasTake(const std::string& name) const {
-  if (name.empty() || name.find('/') != std::string::npos) return false;
   auto lock = h5::Lock();
   impl_->CheckUsable();
-  Handle takes = impl_->Takes();
-  return h5::LinkExists(takes.get(), name);
+  return impl_->takes.count(name) > 0;
 }
 
 std::vector<std::string> CorpusTransaction::TakeNames() const {
   auto lock = h5::Lock();
   impl_->CheckUsable();
-  Handle takes = impl_->Takes();
-  return h5::LinkNames(takes.get(), impl_->where, "/takes");
+  std::vector<std::string> out;
+  for (const auto& [name, e] : impl_->takes) out.push_back(name);
+  return out;
 }
 
 void CorpusTransaction::RemoveTake(const std::string& name) {
   auto lock = h5::Lock();
   impl_->CheckUsable();
-  Handle takes = impl_->Takes();
-  if (name.empty() || name.find('/') != std::string::npos || !h5::LinkExists(takes.get(), name)) {
-    throw InvalidInput(impl_->path + ": no take named '" + name + "'");
-  }
-  h5::Check(H5Ldelete(takes.get(), name.c_str(), H5P_DEFAULT), impl_->where, "cannot delete", TakeObject(name));
-  impl_->freed_space = true;
+  TakeEntry& e = impl_->Entry(name);
+  if (e.writing) throw Error(impl_->path + ": take '" + name + "' is still being written");
+  impl_->DiscardEntry(e);
+  impl_->takes.erase(name);
 }
 
 void CorpusTransaction::WriteTiers(const std::string& take, const std::vector<LabelTier>& tiers) {
   auto lock = h5::Lock();
   impl_->CheckUsable();
-  Handle g = OpenTakeGroup(impl_->file.get(), take, impl_->where);
-  WriteTierGroups(g.get(), tiers, impl_->where, TakeObject(take));
-  impl_->freed_space = true;
+  TakeEntry& e = impl_->Entry(take);
+  std::string rel = impl_->WriteTiersFile(take, tiers);
+  impl_->Discard(e.tiers_file);
+  e.tiers_file = rel;
+  e.tier_names.clear();
+  for (const LabelTier& t : tiers) e.tier_names.push_back(t.name);
 }
 
 void CorpusTransaction::WriteAudio(const std::string& take, const Audio& audio, const std::string& source_path) {
   CheckAudio(audio);
   auto lock = h5::Lock();
   impl_->CheckUsable();
-  Handle g = OpenTakeGroup(impl_->file.get(), take, impl_->where);
-  WriteAudioGroup(g.get(), audio, source_path, impl_->where, TakeObject(take));
-  impl_->freed_space = true;
+  TakeEntry& e = impl_->Entry(take);
+  std::string rel = impl_->WriteAudioFile(take, audio, source_path);
+  impl_->Discard(e.audio_file);
+  e.audio_file = rel;
+  e.has_audio = audio.frames() > 0;
 }
 
 void CorpusTransaction::Commit() {
@@ -872,19 +1343,41 @@ void CorpusTransaction::Commit() {
   Impl& t = *impl_;
   t.CheckUsable();
   if (t.open_writers > 0) throw Error(t.path + ": cannot commit while a take is still being written (call Finish)");
-  h5::Check(H5Fflush(t.file.get(), H5F_SCOPE_GLOBAL), t.where, "cannot flush", t.temp);
-  if (t.freed_space && t.WorthCompacting()) {
-    t.Compact();
-  } else if (!t.file.Reset()) {
-    throw IoError(t.path, "cannot close " + t.temp + ": " + h5::TakeErrorMessage());
+  // (1) The new take files are durable before any index names them.
+  const std::set<std::string> referenced = t.Referenced();
+  for (auto it = t.created.begin(); it != t.created.end();) {
+    if (referenced.count(*it) == 0) {
+      ::unlink(t.Abs(*it).c_str());
+      it = t.created.erase(it);
+    } else {
+      FsyncPath(t.Abs(*it), false, t.path);
+      ++it;
+    }
   }
-  h5::FsyncPath(t.temp, false, t.path);
-  if (::rename(t.temp.c_str(), t.path.c_str()) != 0) {
-    throw IoError(t.path, "cannot rename " + t.temp + " over the corpus: " + Errno());
+  if (!t.created.empty()) FsyncPath(t.folder_abs, true, t.path);
+  RunHook("take files synced");
+  // (2) A fresh index from the table, atomically replacing the corpus.
+  t.WriteIndex();
+  RunHook("index written");
+  try {
+    ReplaceFileDurably(t.temp, t.path);
+  } catch (...) {
+    std::error_code ec;
+    if (!fs::exists(t.temp, ec)) {  // renamed: the new files are the corpus' now
+      t.committed = true;
+      t.created.clear();
+    }
+    throw;
   }
   t.committed = true;
-  fs::path dir = fs::path(t.path).parent_path();
-  h5::FsyncPath(dir.empty() ? std::string(".") : dir.string(), true, t.path);
+  t.created.clear();
+  RunHook("index replaced");
+  // (3) Garbage: files no index references any more, unless a reader may need them.
+  try {
+    t.CollectGarbage(referenced);
+  } catch (const std::exception&) {
+    // Left for a later transaction.
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -894,7 +1387,8 @@ struct CorpusTransaction::TakeWriter::Impl {
   CorpusTransaction::Impl* tx = nullptr;
   std::string name;
   std::string object;
-  Handle group;
+  Handle file;            // the take's new data file
+  std::string data_file;  // its name, as the index links it
   Handle markers;
   Handle analog;
   int64_t marker_count = 0;
@@ -921,23 +1415,23 @@ struct CorpusTransaction::TakeWriter::Impl {
     tx->CheckUsable();
   }
 
-  // An unfinished writer removes its partial take, so that the transaction
-  // never commits half a take.
+  // An unfinished writer removes its partial take and its files, so that the
+  // transaction never commits half a take.
   ~Impl() {
     if (finished || tx == nullptr) return;
     auto lock = h5::Lock();
     analog.Reset();
     markers.Reset();
-    group.Reset();
+    file.Reset();
+    H5Eclear2(H5E_DEFAULT);
     --tx->open_writers;
-    if (!tx->committed && tx->file.valid()) {
-      hid_t takes = H5Gopen2(tx->file.get(), "takes", H5P_DEFAULT);
-      if (takes >= 0) {
-        H5Ldelete(takes, name.c_str(), H5P_DEFAULT);
-        H5Gclose(takes);
+    if (!tx->committed) {
+      auto it = tx->takes.find(name);
+      if (it != tx->takes.end() && it->second.data_file == data_file) {
+        tx->DiscardEntry(it->second);
+        tx->takes.erase(it);
       }
-      H5Eclear2(H5E_DEFAULT);
-      tx->freed_space = true;
+      tx->Discard(data_file);
     }
   }
 
@@ -1090,7 +1584,14 @@ void CorpusTransaction::TakeWriter::Finish() {
   w.Release();
   w.analog.Reset();
   w.markers.Reset();
-  w.group.Reset();
+  h5::Check(H5Fflush(w.file.get(), H5F_SCOPE_GLOBAL), w.tx->where, "cannot flush", w.data_file);
+  CorpusTransaction::Impl::Close(&w.file, w.tx->path, w.data_file);
+  auto it = w.tx->takes.find(w.name);
+  if (it != w.tx->takes.end() && it->second.data_file == w.data_file) {
+    it->second.frames = w.flushed;
+    it->second.gaps = w.gaps;
+    it->second.writing = false;
+  }
   w.finished = true;
   --w.tx->open_writers;
 }
@@ -1110,12 +1611,31 @@ CorpusTransaction::TakeWriter CorpusTransaction::BeginTake(const Take& h, IfTake
   t.CheckUsable();
   const Where& where = t.where;
   const std::string obj = TakeObject(h.name);
-  Handle takes = t.Takes();
-  if (h5::LinkExists(takes.get(), h.name)) {
+  if (auto it = t.takes.find(h.name); it != t.takes.end()) {
     if (if_exists == IfTakeExists::kFail) throw InvalidInput(t.path + ": a take named '" + h.name + "' already exists");
-    h5::Check(H5Ldelete(takes.get(), h.name.c_str(), H5P_DEFAULT), where, "cannot delete", obj);
-    t.freed_space = true;
+    if (it->second.writing) throw Error(t.path + ": take '" + h.name + "' is still being written");
+    t.DiscardEntry(it->second);
+    t.takes.erase(it);
   }
+  const std::string csw_version = h.provenance.csw_version.empty() ? CSW_VERSION : h.provenance.csw_version;
+  const std::string imported_utc = h.provenance.imported_utc.empty() ? UtcNow() : h.provenance.imported_utc;
+  TakeEntry& e = t.takes[h.name];
+  e.rate_hz = h.rate_hz;
+  e.first_frame = h.first_frame;
+  e.source_units = h.source_units;
+  e.imported_utc = imported_utc;
+  e.csw_version = csw_version;
+  e.markerset = h.markerset_json;
+  e.markers = marker_count;
+  e.has_audio = h.audio.frames() > 0;
+  e.analog_channels = channels;
+  for (const LabelTier& tier : h.tiers) e.tier_names.push_back(tier.name);
+  e.data_members = {"markers", "marker_names"};
+  if (channels > 0) e.data_members.push_back("analog");
+  e.data_members.push_back("events");
+  e.data_members.push_back("provenance");
+  e.writing = true;
+
   auto w = std::make_unique<TakeWriter::Impl>();
   w->tx = &t;
   w->name = h.name;
@@ -1125,19 +1645,15 @@ CorpusTransaction::TakeWriter CorpusTransaction::BeginTake(const Take& h, IfTake
   w->in_gap.assign(static_cast<size_t>(marker_count), 0);
   w->threads = static_cast<int>(std::clamp<unsigned>(std::thread::hardware_concurrency(), 1, 4));
   w->batch_chunks = 2 * w->threads;
-  w->group = h5::CreateGroup(takes.get(), h.name, where, obj);
   ++t.open_writers;
-  TakeWriter writer(std::move(w));  // from here on, a failure removes the partial take
+  TakeWriter writer(std::move(w));  // from here on, a failure removes the partial take and its files
   TakeWriter::Impl& wi = *writer.impl_;
-  hid_t g = wi.group.get();
-
-  const std::string csw_version = h.provenance.csw_version.empty() ? CSW_VERSION : h.provenance.csw_version;
-  const std::string imported_utc = h.provenance.imported_utc.empty() ? NowUtc() : h.provenance.imported_utc;
-  h5::WriteAttr(g, "rate_hz", h.rate_hz, where, obj);
-  h5::WriteAttr(g, "first_frame", h.first_frame, where, obj);
-  h5::WriteAttr(g, "source_units", h.source_units, where, obj);
-  h5::WriteAttr(g, "imported_utc", imported_utc, where, obj);
-  h5::WriteAttr(g, "csw_version", csw_version, where, obj);
+  wi.file = t.NewFile(h.name, ".h5", "csw-take", &wi.data_file);
+  e.data_file = wi.data_file;
+  e.tiers_file = t.WriteTiersFile(h.name, h.tiers);
+  e.audio_file = t.WriteAudioFile(h.name, h.audio, h.audio_path);
+  hid_t g = wi.file.get();
+  WriteTakeAttrs(g, e, where, obj);
   h5::WriteStrings(g, "marker_names", h.marker_names, where, obj + "/marker_names");
   {
     const std::string mobj = obj + "/markers";
@@ -1171,8 +1687,6 @@ CorpusTransaction::TakeWriter CorpusTransaction::BeginTake(const Take& h, IfTake
     wi.analog_samples = h.analog.samples;
   }
   WriteEvents(g, h.events, where, obj);
-  WriteTierGroups(g, h.tiers, where, obj);
-  WriteAudioGroup(g, h.audio, h.audio_path, where, obj);
   WriteProvenance(g, h.provenance, csw_version, imported_utc, where, obj);
   return writer;
 }

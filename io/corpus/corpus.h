@@ -1,12 +1,16 @@
 #pragma once
-// The HDF5 corpus store: one file holding takes (and, later, models and
-// dictionaries). The layout is documented in docs/corpus-format.md so that h5py
-// and MATLAB users read it without this code.
+// The HDF5 corpus store. Format version 2 (docs/corpus-format.md): the corpus
+// file "corpus.h5" is a small index whose /takes/<name> groups carry each
+// take's attributes and HDF5 external links into immutable per-take files in
+// the folder "corpus.h5.d/" beside it, so that h5py and MATLAB users still read
+// /takes/<name>/markers with one open call. Version 1 (one self-contained
+// file) and packed files (PackCorpus) are read the same way.
 //
 // Reading goes through Corpus (a read-only view); every change goes through a
-// CorpusTransaction, which writes a temporary sibling file and atomically
-// renames it over the corpus on Commit(): a process killed at any moment leaves
-// the previous corpus intact.
+// CorpusTransaction, which writes only new files (the changed takes' files and
+// a fresh index) and atomically renames the new index over the corpus on
+// Commit(): a process killed at any moment leaves the previous corpus intact,
+// and a commit costs what changed, not the size of the corpus.
 //
 // Thread safety: all HDF5 calls of this module are serialized by one lock, so
 // different Corpus / CorpusTransaction objects may be used from different
@@ -19,8 +23,12 @@
 #include "core/take.h"
 
 namespace csw {
+class Progress;
+}
 
-inline constexpr int kCorpusFormatVersion = 1;
+namespace csw {
+
+inline constexpr int kCorpusFormatVersion = 2;
 // Markers are stored in chunks of kCorpusChunkFrames frames × all markers × 3,
 // with the shuffle filter then deflate at kCorpusDeflateLevel.
 inline constexpr int64_t kCorpusChunkFrames = 256;
@@ -36,6 +44,7 @@ struct TakeSummary {
   std::vector<std::string> tier_names;
   bool has_audio = false;
   int64_t analog_channels = 0;
+  bool has_markerset = false;  // the take remembers the marker set it was imported with (Take::markerset_json)
 };
 
 // A read-only view of a corpus file. Cheap to copy (copies share the open file).
@@ -54,6 +63,11 @@ class Corpus {
   // Frames [first, first + count) of one take, for streaming reads; throws
   // InvalidInput when the range is not inside the take.
   MarkerArray LoadMarkers(const std::string& take, int64_t first, int64_t count) const;
+  // The marker-set definition (JSON text) the take was imported with, "" when
+  // none. Throws InvalidInput when there is no such take.
+  std::string TakeMarkerSet(const std::string& take) const;
+  // 1 (single file), 2 (index + folder, or packed).
+  int format_version() const;
   std::string path() const;
 
  private:
@@ -64,17 +78,25 @@ class Corpus {
 
 enum class IfTakeExists { kFail, kReplace };
 
-// Crash-safe writing. All changes go to a temporary sibling file (a copy of the
-// existing corpus, or a new corpus); Commit() flushes, fsyncs and atomically
-// renames it over the corpus, then fsyncs the directory. Without Commit() the
-// destructor removes the temporary file. Only one transaction per corpus may
-// be open at a time (an advisory lock on a sibling ".<name>.csw-lock" file);
-// a second one throws IoError.
+// Crash-safe writing. Every change writes new, uniquely named files in the
+// folder "<name>.d/" (never rewriting a committed one) and edits an in-memory
+// table of takes; Commit() fsyncs the new files, writes a fresh index to the
+// temporary sibling TempPath(), fsyncs it, renames it over the corpus and
+// fsyncs the directory, then deletes the files no index references any more
+// unless a reader (in another process, or a live Corpus of this one) may still
+// need them. Without Commit() the destructor removes the new files. A
+// transaction on a version-1 or packed corpus copies its takes into per-take
+// files (the upgrade) and commits a version-2 index. Only one transaction per
+// corpus may be open at a time (an advisory lock on a sibling
+// ".<name>.csw-lock" file); a second one throws IoError.
 class CorpusTransaction {
  public:
   // Creates the corpus (in the temporary file) when it does not exist; throws
   // ParseError when an existing file is not a valid corpus.
   explicit CorpusTransaction(const std::string& path);
+  // Same, reporting the upgrade of a version-1 or packed corpus (which copies
+  // every take) to `progress`.
+  CorpusTransaction(const std::string& path, Progress& progress);
   ~CorpusTransaction();
   CorpusTransaction(const CorpusTransaction&) = delete;
   CorpusTransaction& operator=(const CorpusTransaction&) = delete;
@@ -126,8 +148,10 @@ class CorpusTransaction {
   void Commit();
 
   const std::string& path() const;
-  // The temporary file used while a transaction on corpus_path is open.
+  // The temporary index written by Commit() before it replaces the corpus.
   static std::string TempPath(const std::string& corpus_path);
+  // The folder of per-take files of a version-2 corpus: "<corpus_path>.d".
+  static std::string FolderPath(const std::string& corpus_path);
 
  private:
   struct Impl;

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -363,14 +364,69 @@ std::vector<double> ReadDoubles(hid_t loc, const std::string& name, const Where&
   return out;
 }
 
-void FsyncPath(const std::string& p, bool directory, const std::string& target) {
-  const int fd = ::open(p.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
-  if (fd < 0) throw IoError(target, "cannot open " + p + " to sync it: " + std::strerror(errno));
-  const int r = ::fsync(fd);
-  const int saved = errno;
-  ::close(fd);
-  if (r != 0 && !(directory && (saved == EINVAL || saved == EROFS))) {
-    throw IoError(target, "cannot sync " + p + ": " + std::strerror(saved));
+namespace {
+
+struct AttrCopy {
+  hid_t dst;
+  const Where* where;
+  const std::string* object;
+  std::string error;
+};
+
+herr_t CopyOneAttribute(hid_t src, const char* name, const H5A_info_t*, void* data) {
+  auto* c = static_cast<AttrCopy*>(data);
+  try {
+    Handle attr = Own(H5Aopen(src, name, H5P_DEFAULT), H5Aclose, *c->where,
+                      std::string("cannot open attribute ") + name + " of", *c->object);
+    Handle ftype = Own(H5Aget_type(attr.get()), H5Tclose, *c->where, "cannot copy attribute", *c->object);
+    Handle space = Own(H5Aget_space(attr.get()), H5Sclose, *c->where, "cannot copy attribute", *c->object);
+    Handle mtype =
+        Own(H5Tget_native_type(ftype.get(), H5T_DIR_DEFAULT), H5Tclose, *c->where, "cannot copy attribute", *c->object);
+    hssize_t n = H5Sget_simple_extent_npoints(space.get());
+    if (n < 0) throw IoError(c->where->file, "cannot copy attribute " + std::string(name) + " of " + *c->object);
+    std::vector<unsigned char> buf(static_cast<size_t>(std::max<hssize_t>(n, 1)) * H5Tget_size(mtype.get()));
+    Check(H5Aread(attr.get(), mtype.get(), buf.data()), *c->where, std::string("cannot read attribute ") + name + " of",
+          *c->object);
+    const bool vlen = H5Tdetect_class(mtype.get(), H5T_VLEN) > 0 || H5Tis_variable_str(mtype.get()) > 0;
+    if (AttrExists(c->dst, name)) H5Adelete(c->dst, name);
+    hid_t out = H5Acreate2(c->dst, name, ftype.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT);
+    herr_t w = out >= 0 ? H5Awrite(out, mtype.get(), buf.data()) : -1;
+    if (out >= 0) H5Aclose(out);
+    if (vlen) H5Dvlen_reclaim(mtype.get(), space.get(), H5P_DEFAULT, buf.data());
+    Check(w, *c->where, std::string("cannot write attribute ") + name + " of", *c->object);
+  } catch (const std::exception& e) {
+    c->error = e.what();
+    return -1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+void CopyAttributes(hid_t src, hid_t dst, const Where& where, const std::string& object) {
+  AttrCopy c{dst, &where, &object, ""};
+  hsize_t idx = 0;
+  herr_t r = H5Aiterate2(src, H5_INDEX_NAME, H5_ITER_INC, &idx, CopyOneAttribute, &c);
+  if (!c.error.empty()) {
+    H5Eclear2(H5E_DEFAULT);
+    throw IoError(where.file, c.error);
+  }
+  Check(r, where, "cannot copy the attributes of", object);
+}
+
+void CopyTree(hid_t src_loc, const std::string& name, hid_t dst_loc, const Where& where, const std::string& object) {
+  H5O_info_t info;
+  Check(H5Oget_info_by_name(src_loc, name.c_str(), &info, H5P_DEFAULT), where, "cannot copy", object);
+  if (info.type != H5O_TYPE_GROUP) {
+    Check(H5Ocopy(src_loc, name.c_str(), dst_loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT), where, "cannot copy",
+          object);
+    return;
+  }
+  Handle src = OpenGroup(src_loc, name, where, object);
+  Handle dst = CreateGroup(dst_loc, name, where, object);
+  CopyAttributes(src.get(), dst.get(), where, object);
+  for (const std::string& member : LinkNames(src.get(), where, object)) {
+    CopyTree(src.get(), member, dst.get(), where, object + "/" + member);
   }
 }
 

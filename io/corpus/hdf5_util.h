@@ -96,12 +96,16 @@ void WriteDoubles(hid_t loc, const std::string& name, const std::vector<double>&
 std::vector<std::string> ReadStrings(hid_t loc, const std::string& name, const Where& where, const std::string& object);
 std::vector<double> ReadDoubles(hid_t loc, const std::string& name, const Where& where, const std::string& object);
 
+// Copies every attribute of src to dst (replacing same-named ones).
+void CopyAttributes(hid_t src, hid_t dst, const Where& where, const std::string& object);
+// Copies the object src_loc/name (following soft and external links) to
+// dst_loc/name: groups are re-created with their attributes copied one by one
+// and their members copied recursively; datasets with H5Ocopy. (HDF5 1.10's
+// H5Ocopy crashes on groups whose variable-length string attributes are in
+// dense storage, which csw's take groups and long warning lists use.)
+void CopyTree(hid_t src_loc, const std::string& name, hid_t dst_loc, const Where& where, const std::string& object);
+
 // Variable-length UTF-8 string type.
 Handle Utf8StringType(const Where& where);
-
-// Flushes a file (or, with directory, a folder's entries) to disk; IoError
-// naming `target` (the corpus or model file being saved) on failure. A folder
-// that cannot be synced (EINVAL/EROFS on some file systems) is not an error.
-void FsyncPath(const std::string& path, bool directory, const std::string& target);
 
 }  // namespace csw::h5

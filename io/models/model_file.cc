@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "core/error.h"
+#include "core/file_util.h"
 #include "io/corpus/hdf5_util.h"
 
 #ifndef CSW_VERSION
@@ -39,15 +40,6 @@ constexpr hssize_t kMaxElements = hssize_t{1} << 28;
 constexpr double kRotationTolerance = 1e-6;
 
 std::string Errno() { return std::strerror(errno); }
-
-std::string NowUtc() {
-  std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
 
 std::string Num(double v) {
   char buf[64];
@@ -917,18 +909,34 @@ ModelFile LoadModelFile(const std::string& path) {
   }
 }
 
-void SaveModelFile(const std::string& path, const ModelFile& models) {
+namespace {
+
+// SaveModelFile without the writer lock (the caller holds it).
+void SaveModelFileLocked(const std::string& path, const ModelFile& models) {
   Checker c(path, false);
   if (models.head) ValidateRigid(*models.head, std::string("/") + kHeadGroup, c);
   if (models.forearm) ValidateRigid(*models.forearm, std::string("/") + kForearmGroup, c);
   if (models.face) ValidateFace(*models.face, std::string("/") + kFaceGroup, c);
   if (models.hand) ValidateHand(*models.hand, std::string("/") + kHandGroup, c);
-  if (path.empty()) throw IoError(path, "no output file name");
 
   auto lock = h5::Lock();
   RefuseToClobber(path);
   const Where& where = c.where();
   TempFile temp{ModelFileTempPath(path)};
+  {
+    // The caller holds the writer lock: temporary files of other processes
+    // are left by killed writers.
+    const fs::path p(path);
+    const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    const std::string prefix = "." + p.filename().string() + ".csw-tmp.";
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.compare(0, prefix.size(), prefix) == 0 && e.path() != fs::path(temp.path) && e.is_regular_file(ec)) {
+        fs::remove(e.path(), ec);
+      }
+    }
+  }
   {
     Handle fapl = FileAccessList(where);
     Handle file = h5::Own(H5Fcreate(temp.path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose, where,
@@ -937,7 +945,7 @@ void SaveModelFile(const std::string& path, const ModelFile& models) {
     h5::WriteAttr(f, "format", std::string(kFormatName), where, "/");
     h5::WriteAttr(f, "format_version", int64_t{kModelFormatVersion}, where, "/");
     h5::WriteAttr(f, "csw_version", std::string(CSW_VERSION), where, "/");
-    h5::WriteAttr(f, "created_utc", NowUtc(), where, "/");
+    h5::WriteAttr(f, "created_utc", UtcNow(), where, "/");
     if (models.head) WriteRigid(f, kHeadGroup, *models.head, where, std::string("/") + kHeadGroup);
     if (models.forearm) WriteRigid(f, kForearmGroup, *models.forearm, where, std::string("/") + kForearmGroup);
     if (models.face) WriteFace(f, *models.face, where);
@@ -945,16 +953,24 @@ void SaveModelFile(const std::string& path, const ModelFile& models) {
     h5::Check(H5Fflush(f, H5F_SCOPE_GLOBAL), where, "cannot flush", temp.path);
     if (!file.Reset()) throw IoError(path, "cannot close " + temp.path + ": " + h5::TakeErrorMessage());
   }
-  h5::FsyncPath(temp.path, false, path);
-  if (::rename(temp.path.c_str(), path.c_str()) != 0) {
-    throw IoError(path, "cannot rename " + temp.path + " over the model file: " + Errno());
-  }
+  ReplaceFileDurably(temp.path, path);
   temp.keep = true;
-  fs::path dir = fs::path(path).parent_path();
-  h5::FsyncPath(dir.empty() ? std::string(".") : dir.string(), true, path);
+}
+
+}  // namespace
+
+void SaveModelFile(const std::string& path, const ModelFile& models) {
+  if (path.empty()) throw IoError(path, "no output file name");
+  // One writer at a time: a second `csw fit -o same.h5` gets a clear error.
+  WriterLock writer(path, "model file");
+  SaveModelFileLocked(path, models);
 }
 
 void UpdateModelFile(const std::string& path, const ModelFile& update) {
+  if (path.empty()) throw IoError(path, "no output file name");
+  // The lock covers the whole read-modify-write, so that two concurrent
+  // updates cannot lose a model: the second one fails with the lock message.
+  WriterLock writer(path, "model file");
   auto lock = h5::Lock();
   ModelFile models;
   std::error_code ec;
@@ -966,7 +982,7 @@ void UpdateModelFile(const std::string& path, const ModelFile& update) {
   if (update.forearm) models.forearm = update.forearm;
   if (update.face) models.face = update.face;
   if (update.hand) models.hand = update.hand;
-  SaveModelFile(path, models);
+  SaveModelFileLocked(path, models);
 }
 
 }  // namespace csw

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -422,6 +423,9 @@ TEST(Corpus, GapsAreCountedWhenTheAttributeIsAbsent) {
   hid_t d = H5Dopen2(f, "/takes/t/markers", H5P_DEFAULT);
   ASSERT_GE(H5Adelete(d, "gaps"), 0);
   H5Dclose(d);
+  hid_t g = H5Gopen2(f, "/takes/t", H5P_DEFAULT);  // and the index's cached copy
+  ASSERT_GE(H5Adelete(g, "gap_count"), 0);
+  H5Gclose(g);
   H5Fclose(f);
   EXPECT_EQ(Corpus::Open(path).Summary("t").gaps, TotalGaps(t.markers));
 }
@@ -449,6 +453,14 @@ TEST(Corpus, CancelledTransactionLeavesTheCorpusUnchangedAndNoTempFile) {
   Take a = MakeFullTake("a");
   WriteCorpus(path, {a});
   const std::string temp = CorpusTransaction::TempPath(path);
+  const std::string folder = CorpusTransaction::FolderPath(path);
+  auto files = [&] {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(folder)) out.push_back(e.path().filename().string());
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  const std::vector<std::string> files_before = files();
   Progress progress;
   try {
     CorpusTransaction tx(path);
@@ -458,7 +470,7 @@ TEST(Corpus, CancelledTransactionLeavesTheCorpusUnchangedAndNoTempFile) {
     header.markers = MarkerArray();
     CorpusTransaction::TakeWriter w = tx.BeginTake(header);
     w.AppendFrames(b.markers.data().data(), 1000);
-    EXPECT_TRUE(fs::exists(temp));
+    EXPECT_GT(files().size(), files_before.size());  // the new take's files
     progress.Cancel();
     progress.Update("import", 0.5);  // throws Cancelled
     FAIL() << "Update did not throw";
@@ -466,6 +478,7 @@ TEST(Corpus, CancelledTransactionLeavesTheCorpusUnchangedAndNoTempFile) {
   }
   EXPECT_FALSE(fs::exists(temp));
   EXPECT_FALSE(fs::exists(temp + ".compact"));
+  EXPECT_EQ(files(), files_before);  // the cancelled take's files are gone
   Corpus corpus = Corpus::Open(path);
   ASSERT_EQ(corpus.Takes().size(), 1u);
   ExpectSameTake(a, corpus.LoadTake("a"));
@@ -499,8 +512,26 @@ TEST(Corpus, SecondConcurrentTransactionIsRefused) {
   const std::string path = (dir / "c.h5").string();
   CorpusTransaction first(path);
   std::string message = ErrorOf([&] { CorpusTransaction second(path); });
-  EXPECT_NE(message.find("another transaction (in this or another process) is writing"), std::string::npos) << message;
+  EXPECT_NE(message.find("(in this or another process) is writing this corpus"), std::string::npos) << message;
   EXPECT_NE(message.find(path), std::string::npos) << message;
+}
+
+// The refused transaction must not touch the first one's files (its new take
+// files, its temporary index): the first one still commits everything.
+TEST(Corpus, RefusedTransactionLeavesTheWritersFilesAlone) {
+  TempDir dir;
+  const std::string path = (dir / "c.h5").string();
+  WriteCorpus(path, {MakeFullTake("a", 20, 2)});
+  CorpusTransaction first(path);
+  Take b = MakeFullTake("b", 30, 3);
+  first.WriteTake(b);
+  std::ofstream(CorpusTransaction::TempPath(path)) << "stand-in for the writer's temporary index";
+  EXPECT_THROW(CorpusTransaction second(path), IoError);
+  EXPECT_TRUE(fs::exists(CorpusTransaction::TempPath(path)));
+  first.Commit();
+  Corpus corpus = Corpus::Open(path);
+  ASSERT_EQ(corpus.Takes().size(), 2u);
+  ExpectSameTake(b, corpus.LoadTake("b"));
 }
 
 TEST(Corpus, ReadersAndAWriterInDifferentThreads) {
@@ -686,9 +717,9 @@ TEST(Corpus, WrongFormatOrNewerVersionIsRefused) {
   EXPECT_NE(ErrorOf([&] { Corpus::Open(path); }).find("not a csw corpus"), std::string::npos);
   WriteHandMadeCorpus(path, "something-else", 1, {1, 1, 3}, 1);
   EXPECT_NE(ErrorOf([&] { Corpus::Open(path); }).find("format is 'something-else'"), std::string::npos);
-  WriteHandMadeCorpus(path, "csw-corpus", 2, {1, 1, 3}, 1);
+  WriteHandMadeCorpus(path, "csw-corpus", 3, {1, 1, 3}, 1);
   std::string e = ErrorOf([&] { Corpus::Open(path); });
-  EXPECT_NE(e.find("format_version 2 is newer"), std::string::npos) << e;
+  EXPECT_NE(e.find("format_version 3 is newer"), std::string::npos) << e;
   EXPECT_THROW(Corpus::Open(path), ParseError);
 }
 

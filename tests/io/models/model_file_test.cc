@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <Eigen/Geometry>
@@ -20,6 +22,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/file_util.h"
 #include "io/corpus/corpus.h"
 #include "tests/io/models/model_test_util.h"
 #include "tests/testing/testing.h"
@@ -165,9 +168,14 @@ void WriteBytes(const fs::path& p, const std::string& bytes) {
 }
 
 // Names of the entries of dir, sorted.
+// The files of a folder, without the writer-lock files (".<name>.csw-lock",
+// left in place by design, docs/model-format.md).
 std::vector<std::string> DirEntries(const fs::path& dir) {
   std::vector<std::string> out;
-  for (const auto& e : fs::directory_iterator(dir)) out.push_back(e.path().filename().string());
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() < 9 || name.compare(name.size() - 9, 9, ".csw-lock") != 0) out.push_back(name);
+  }
   std::sort(out.begin(), out.end());
   return out;
 }
@@ -590,6 +598,106 @@ TEST(ModelFile, UpdateKeepsTheModelsNotInTheUpdate) {
   expected.hand = all.hand;     // added
   ExpectSameFile(expected, LoadModelFile(path));
   EXPECT_EQ(DirEntries(dir.path()), std::vector<std::string>{"m.h5"});
+}
+
+// Two `csw fit -o same.h5` at once: the second update must fail with the
+// lock message instead of silently dropping the first one's model.
+TEST(ModelFile, ConcurrentUpdateOfTheSameFileIsRefusedWithTheLockMessage) {
+  TempDir dir;
+  const std::string path = (dir / "m.h5").string();
+  const ModelFile all = MakeAll();
+  ModelFile first;
+  first.head = all.head;
+  UpdateModelFile(path, first);
+  const std::string before = ReadBytes(path);
+  int ready[2];
+  int done[2];
+  ASSERT_EQ(pipe(ready), 0);
+  ASSERT_EQ(pipe(done), 0);
+  pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    // Child: another csw process in the middle of its update (holding the lock).
+    int code = 0;
+    try {
+      WriterLock lock(path, "model file");
+      char c = 'r';
+      if (write(ready[1], &c, 1) != 1) code = 2;
+      if (read(done[0], &c, 1) != 1) code = 3;
+    } catch (...) {
+      code = 4;
+    }
+    _exit(code);
+  }
+  char c = 0;
+  ASSERT_EQ(read(ready[0], &c, 1), 1);
+  ModelFile second;
+  second.hand = all.hand;
+  const std::string msg = ErrorOf<IoError>([&] { UpdateModelFile(path, second); });
+  EXPECT_CONTAINS(msg, path);
+  EXPECT_CONTAINS(msg, "is writing this model file");
+  EXPECT_CONTAINS(msg, ".m.h5.csw-lock is locked");
+  const std::string msg_save = ErrorOf<IoError>([&] { SaveModelFile(path, second); });
+  EXPECT_CONTAINS(msg_save, "is writing this model file");
+  EXPECT_EQ(ReadBytes(path), before);  // the holder's file is untouched
+  ASSERT_EQ(write(done[1], "x", 1), 1);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  for (int fd : {ready[0], ready[1], done[0], done[1]}) close(fd);
+  // Once the lock is released the update goes through and keeps both models.
+  UpdateModelFile(path, second);
+  ModelFile expected;
+  expected.head = all.head;
+  expected.hand = all.hand;
+  ExpectSameFile(expected, LoadModelFile(path));
+}
+
+// kill -9 of a process saving the same model file over and over: the file
+// always loads as one of the two saved states, and the next save removes the
+// killed writer's temporary file.
+TEST(ModelFile, SigkillDuringRepeatedSavesLeavesOneCompleteFile) {
+  TempDir dir;
+  const std::string path = (dir / "m.h5").string();
+  const ModelFile all = MakeAll();
+  ModelFile a;
+  a.head = all.head;
+  ModelFile b = all;
+  SaveModelFile(path, a);
+  pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    try {
+      for (int i = 0;; ++i) SaveModelFile(path, i % 2 == 0 ? b : a);
+    } catch (...) {
+    }
+    _exit(3);
+  }
+  // Kill it after it has replaced the file several times (new inode per save).
+  int saves_seen = 0;
+  ino_t last = 0;
+  for (int i = 0; i < 4000 && saves_seen < 6; ++i) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0 && st.st_ino != last) {
+      last = st.st_ino;
+      ++saves_seen;
+    }
+    usleep(1000 + (i % 7) * 300);
+  }
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+  ASSERT_GE(saves_seen, 3) << "the child did not save";
+  const ModelFile back = LoadModelFile(path);
+  if (back.hand) {
+    ExpectSameFile(b, back);
+  } else {
+    ExpectSameFile(a, back);
+  }
+  SaveModelFile(path, a);
+  EXPECT_EQ(DirEntries(dir.path()), std::vector<std::string>{"m.h5"});
+  ExpectSameFile(a, LoadModelFile(path));
 }
 
 TEST(ModelFile, InconsistentModelIsRejectedBeforeWriting) {
