@@ -271,6 +271,53 @@ class InvertCommand : public Command {
   bool json_ = false;
 };
 
+class PackCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("pack",
+                              "Write a corpus (index + its .d folder) as one self-contained file to send; "
+                              "csw reads it like any corpus");
+    sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
+    sub_->add_option("-o,--output", options_.output, "Output file (must not exist)")->required();
+    sub_->add_flag("--json", json_, "Machine-readable JSON output");
+  }
+  int Run(Progress& progress) override {
+    nlohmann::json r = jobs::Pack(options_, progress);
+    if (json_)
+      PrintJson(r);
+    else
+      std::cout << jobs::PackText(r);
+    return 0;
+  }
+
+ private:
+  jobs::PackOptions options_;
+  bool json_ = false;
+};
+
+class UpgradeCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("upgrade",
+                              "Rewrite a version-1 or packed corpus as format version 2 (index + .d folder), "
+                              "crash-safely; writing to it with any command does the same");
+    sub_->add_option("corpus", corpus_, "Corpus file")->required();
+    sub_->add_flag("--json", json_, "Machine-readable JSON output");
+  }
+  int Run(Progress& progress) override {
+    nlohmann::json r = jobs::Upgrade(corpus_, progress);
+    if (json_)
+      PrintJson(r);
+    else
+      std::cout << jobs::UpgradeText(r);
+    return 0;
+  }
+
+ private:
+  std::string corpus_;
+  bool json_ = false;
+};
+
 }  // namespace
 
 std::vector<std::unique_ptr<Command>> MakeCommands() {
@@ -282,6 +329,8 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<SimulateCommand>());
   c.push_back(std::make_unique<FitCommand>());
   c.push_back(std::make_unique<InvertCommand>());
+  c.push_back(std::make_unique<PackCommand>());
+  c.push_back(std::make_unique<UpgradeCommand>());
   return c;
 }
 

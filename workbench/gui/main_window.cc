@@ -294,8 +294,19 @@ bool MainWindow::SelectTake(const QString& name) {
   }
   playback_->Pause();
   take_ = take;
+  // A marker set loaded by the user wins; otherwise the one the take was
+  // imported with (the corpus remembers it), so sticks and frames show at once.
+  std::optional<MarkerSet> remembered;
+  if (!marker_set_ && !take_->markerset_json.empty()) {
+    try {
+      remembered = ParseMarkerSet(take_->markerset_json, corpus_->path() + ": take " + take_->name);
+    } catch (const std::exception& e) {
+      log_->Warning(tr("Marker set remembered by %1 not usable: %2").arg(name, QString::fromStdString(e.what())));
+    }
+  }
+  const MarkerSet* set = marker_set_ ? &*marker_set_ : (remembered ? &*remembered : nullptr);
   try {
-    marker_view_->SetTake(take_, marker_set_ ? &*marker_set_ : nullptr);
+    marker_view_->SetTake(take_, set);
   } catch (const std::exception& e) {
     log_->Warning(tr("Marker set not applied to %1: %2").arg(name, QString::fromStdString(e.what())));
     marker_view_->SetTake(take_, nullptr);

@@ -14,6 +14,7 @@
 #include "models/inversion.h"
 #include "models/rigid_model.h"
 #include "workbench/jobs/figures.h"
+#include "workbench/jobs/job_util.h"
 #include "workbench/jobs/model_config.h"
 #include "workbench/jobs/model_reports.h"
 #include "workbench/jobs/take_data.h"
@@ -241,6 +242,30 @@ void FitHand(const FitContext& x, ModelFile* update) {
   update->hand = std::move(m);
 }
 
+// The marker set the selected takes were imported with (the corpus remembers
+// it): every take must have one, and all the same.
+MarkerSet RememberedMarkerSet(const Corpus& corpus, const std::vector<TakeRange>& ranges) {
+  std::string text;
+  std::string first_take;
+  for (const TakeRange& r : ranges) {
+    const std::string t = corpus.TakeMarkerSet(r.take);
+    if (t.empty()) {
+      throw UsageError("no marker set: take '" + r.take + "' of " + corpus.path() +
+                       " was imported without --markerset; give --markerset SET.json (or \"markerset\" in the "
+                       "--config file)");
+    }
+    if (first_take.empty()) {
+      text = t;
+      first_take = r.take;
+    } else if (t != text) {
+      throw UsageError("takes '" + first_take + "' and '" + r.take + "' of " + corpus.path() +
+                       " were imported with different marker sets; give --markerset SET.json");
+    }
+  }
+  if (first_take.empty()) throw UsageError("no marker set: no take selected; give --markerset SET.json");
+  return ParseMarkerSet(text, corpus.path() + ": take '" + first_take + "'");
+}
+
 }  // namespace
 
 std::string FitOptions::Check() const {
@@ -253,13 +278,16 @@ std::string FitOptions::Check() const {
 json Fit(const FitOptions& options, Progress& progress) {
   if (const std::string why = options.Check(); !why.empty()) throw InvalidInput(why);
   const ModelConfig config = LoadModelConfig(options.config);
-  const std::string set_file = options.markerset.empty() ? config.markerset : options.markerset;
-  if (set_file.empty()) {
-    throw InvalidInput("no marker set: give --markerset SET.json (or \"markerset\" in the --config file)");
-  }
-  const MarkerSet set = LoadMarkerSet(set_file);
+  std::string set_file = options.markerset.empty() ? config.markerset : options.markerset;
   const Corpus corpus = Corpus::Open(options.corpus);
   const std::vector<TakeRange> ranges = SelectCorpusTakes(corpus, options.takes);
+  MarkerSet set;
+  if (!set_file.empty()) {
+    set = LoadMarkerSet(set_file);
+  } else {
+    set = RememberedMarkerSet(corpus, ranges);
+    set_file = options.corpus + " (marker set remembered with take '" + ranges.front().take + "')";
+  }
   if (!options.figures.empty()) figures::Require();  // before any work
 
   ModelInfo info;

@@ -119,7 +119,10 @@ ImportResult Import(const ImportOptions& options, Progress& progress) {
       header.events = whole.events;
       header.provenance.warnings = whole.provenance.warnings;
     }
-    if (markerset) BindMarkerSet(*markerset, header.marker_names, true, files.capture);
+    if (markerset) {
+      BindMarkerSet(*markerset, header.marker_names, true, files.capture);
+      header.markerset_json = MarkerSetToJson(*markerset);  // the corpus remembers it with the take
+    }
     if (!files.labels.empty()) {
       header.provenance.sources.push_back({files.labels, Sha256OfFile(files.labels), files.labels_format});
       if (files.labels_format == "textgrid") {

@@ -23,15 +23,14 @@ json Info(const std::string& corpus_path) {
                      {"gaps", t.gaps},
                      {"tiers", t.tier_names},
                      {"audio", t.has_audio},
-                     {"analog_channels", t.analog_channels}});
+                     {"analog_channels", t.analog_channels},
+                     {"markerset", t.has_markerset}});
     total_s += t.duration_s;
     total_frames += t.frames;
   }
-  return {{"corpus", corpus_path},
-          {"takes", takes},
-          {"take_count", takes.size()},
-          {"frames", total_frames},
-          {"duration_s", total_s}};
+  return {{"corpus", corpus_path},  {"format_version", corpus.format_version()},
+          {"takes", takes},         {"take_count", takes.size()},
+          {"frames", total_frames}, {"duration_s", total_s}};
 }
 
 std::string InfoText(const json& info) {

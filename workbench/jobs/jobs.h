@@ -8,4 +8,5 @@
 #include "workbench/jobs/info_job.h"
 #include "workbench/jobs/inspect_job.h"
 #include "workbench/jobs/job_util.h"
+#include "workbench/jobs/pack_job.h"
 #include "workbench/jobs/simulate_job.h"
