@@ -304,11 +304,10 @@ TEST(Cli, KilledImportLeavesThePreviousCorpusIntact) {
   // Wait until the import's temporary corpus exists and has grown, then kill.
   bool seen = false;
   for (int i = 0; i < 2000 && !seen; ++i) {
-    for (const auto& e : fs::directory_iterator(dir.path())) {
-      std::string n = e.path().filename().string();
-      std::error_code ec;
-      if (n != "corpus.h5" && n.find("corpus.h5") != std::string::npos && fs::file_size(e.path(), ec) > 200000)
-        seen = true;
+    // The import writes the take into a new file of the corpus folder.
+    std::error_code ec;
+    for (const auto& e : fs::recursive_directory_iterator(dir / "corpus.h5.d", ec)) {
+      if (e.is_regular_file(ec) && fs::file_size(e.path(), ec) > 200000) seen = true;
     }
     if (!seen) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
@@ -483,11 +482,10 @@ TEST(Cli, SigtermDuringImportExits143AndKeepsTheCorpus) {
   ASSERT_GE(pid, 0);
   bool seen = false;
   for (int i = 0; i < 2000 && !seen; ++i) {
-    for (const auto& e : fs::directory_iterator(dir.path())) {
-      std::string n = e.path().filename().string();
-      std::error_code ec;
-      if (n != "corpus.h5" && n.find("corpus.h5.csw-tmp") != std::string::npos && fs::file_size(e.path(), ec) > 200000)
-        seen = true;
+    // The import writes the take into a new file of the corpus folder.
+    std::error_code ec;
+    for (const auto& e : fs::recursive_directory_iterator(dir / "corpus.h5.d", ec)) {
+      if (e.is_regular_file(ec) && fs::file_size(e.path(), ec) > 200000) seen = true;
     }
     if (!seen) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
@@ -498,6 +496,9 @@ TEST(Cli, SigtermDuringImportExits143AndKeepsTheCorpus) {
   ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal instead of exiting";
   EXPECT_EQ(WEXITSTATUS(status), 143);
   EXPECT_EQ(Sha256OfFile(corpus.string()), before);
+  const Corpus c = Corpus::Open(corpus.string());
+  ASSERT_EQ(c.Takes().size(), 1u);
+  EXPECT_EQ(c.Takes()[0].name, "small");
 }
 
 // `csw inspect models.h5` failed: every .h5 was opened as a corpus.
