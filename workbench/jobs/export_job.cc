@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "core/error.h"
+#include "core/file_util.h"
 #include "core/take.h"
 #include "io/c3d/c3d.h"
 #include "io/corpus/corpus.h"
@@ -68,9 +69,8 @@ void Export(const ExportOptions& options, Progress& progress) {
       out.close();
       if (!out) throw IoError(tmp, "write failed");
     }
+    ReplaceFileDurably(tmp, options.output);
     std::error_code ec;
-    fs::rename(tmp, options.output, ec);
-    if (ec) throw IoError(options.output, "cannot rename from " + tmp + ": " + ec.message());
     fs::remove(tmp_dir, ec);
   } catch (...) {
     std::error_code ec;

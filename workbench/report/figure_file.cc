@@ -15,6 +15,7 @@
 #include <system_error>
 
 #include "core/error.h"
+#include "core/file_util.h"
 
 namespace csw::report {
 
@@ -56,9 +57,7 @@ class PartFile {
   // ok: whether the writer reported success.
   void Commit(bool ok) {
     if (!ok || QFileInfo(part_).size() == 0) throw IoError(Std(path_), "could not write the figure");
-    std::error_code ec;
-    std::filesystem::rename(part_.toStdString(), path_.toStdString(), ec);
-    if (ec) throw IoError(Std(path_), "could not replace the file: " + ec.message());
+    ReplaceFileDurably(part_.toStdString(), Std(path_));
     committed_ = true;
   }
 
