@@ -287,6 +287,19 @@ TEST(Cli, MarkerSetMismatchNamesTheMissingMarkers) {
 }
 
 // A real SIGKILL in the middle of `csw import`: the previous corpus stays intact.
+// Waits (up to 10 s) until an import writing into a corpus has a take file
+// of more than 200 kB in the corpus folder; false when it never had.
+bool WaitForTakeFileToGrow(const fs::path& folder) {
+  for (int i = 0; i < 2000; ++i) {
+    std::error_code ec;
+    for (const auto& e : fs::recursive_directory_iterator(folder, ec)) {
+      if (e.is_regular_file(ec) && fs::file_size(e.path(), ec) > 200000) return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return false;
+}
+
 TEST(Cli, KilledImportLeavesThePreviousCorpusIntact) {
   testing::TempDir dir;
   WriteC3d((dir / "small.c3d").string(), SmallTake("small", 30, 3));
@@ -301,16 +314,7 @@ TEST(Cli, KilledImportLeavesThePreviousCorpusIntact) {
           static_cast<char*>(nullptr));
     _exit(127);
   }
-  // Wait until the import's temporary corpus exists and has grown, then kill.
-  bool seen = false;
-  for (int i = 0; i < 2000 && !seen; ++i) {
-    // The import writes the take into a new file of the corpus folder.
-    std::error_code ec;
-    for (const auto& e : fs::recursive_directory_iterator(dir / "corpus.h5.d", ec)) {
-      if (e.is_regular_file(ec) && fs::file_size(e.path(), ec) > 200000) seen = true;
-    }
-    if (!seen) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
+  const bool seen = WaitForTakeFileToGrow(dir / "corpus.h5.d");
   kill(pid, SIGKILL);
   int status = 0;
   waitpid(pid, &status, 0);
@@ -480,15 +484,7 @@ TEST(Cli, SigtermDuringImportExits143AndKeepsTheCorpus) {
   WriteC3d((dir / "big.c3d").string(), SmallTake("big", 40000, 60));
   pid_t pid = Spawn({"-q", "import", (dir / "big.c3d").string(), "-o", corpus.string()});
   ASSERT_GE(pid, 0);
-  bool seen = false;
-  for (int i = 0; i < 2000 && !seen; ++i) {
-    // The import writes the take into a new file of the corpus folder.
-    std::error_code ec;
-    for (const auto& e : fs::recursive_directory_iterator(dir / "corpus.h5.d", ec)) {
-      if (e.is_regular_file(ec) && fs::file_size(e.path(), ec) > 200000) seen = true;
-    }
-    if (!seen) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
+  const bool seen = WaitForTakeFileToGrow(dir / "corpus.h5.d");
   kill(pid, SIGTERM);
   int status = 0;
   waitpid(pid, &status, 0);
