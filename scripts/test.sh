@@ -42,6 +42,7 @@ cmake -S . -B build/asan -G Ninja -DCSW_WERROR=ON -DCSW_SANITIZE=ON -DCSW_BUILD_
 cmake --build build/asan -j"$jobs"
 stamp "tests under ASan + UBSan"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0
+export LSAN_OPTIONS=suppressions=$root/tests/lsan.supp
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # The virtual-cuer acceptance run (18 simulated sentences through csw simulate,
 # import, fit and invert; about 25 s in stage 1) is left out here: at -O0 with
