@@ -1,6 +1,5 @@
 #include "models/face_model.h"
 
-#include <ceres/ceres.h>
 #include <ceres/tiny_solver.h>
 
 #include <Eigen/Cholesky>
@@ -56,57 +55,49 @@ Eigen::Vector3d LabToHead(const Eigen::Vector3d& lab, const RigidTransform& pose
   return a.partialPivLu().solve(b);
 }
 
-// One selected frame of one throat marker: lab = A (m + L p) + w t + (1 − w) t̄,
-// parameter blocks w (1), m (3), L (3 × P row-major).
-class ThroatResidual : public ceres::CostFunction {
- public:
-  ThroatResidual(const RigidTransform* pose, const RigidTransform* rest, const double* params, int num_params,
-                 const Eigen::Vector3d& observed)
-      : pose_(pose), rest_(rest), p_(params), np_(num_params), obs_(observed) {
-    set_num_residuals(3);
-    mutable_parameter_block_sizes()->push_back(1);
-    mutable_parameter_block_sizes()->push_back(3);
-    mutable_parameter_block_sizes()->push_back(3 * num_params);
-  }
+// One throat marker over the selected frames, for ceres::TinySolver (header
+// only; the csw binary does not link the Ceres library): frame f gives the
+// 3 residuals A_f (m + L p_f) + w t_f + (1 - w) t_bar - obs_f, with
+// A_f = w R_f + (1 - w) R_bar; parameters x = (w, m (3), L (3 x P row-major)).
+// The Jacobian is analytic (column-major, as TinySolver expects).
+struct ThroatProblem {
+  using Scalar = double;
+  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = Eigen::Dynamic };
+  const std::vector<RigidTransform>* poses = nullptr;
+  const RigidTransform* rest = nullptr;
+  const Eigen::MatrixXd* params = nullptr;  // P x n, one column per frame
+  const Eigen::Matrix3Xd* observed = nullptr;
+  int np = 0;
+  int NumResiduals() const { return 3 * static_cast<int>(observed->cols()); }
+  int NumParameters() const { return 4 + 3 * np; }
 
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const double w = parameters[0][0];
-    const double* m = parameters[1];
-    const double* l = parameters[2];
-    Eigen::Vector3d x(m[0], m[1], m[2]);
-    for (int i = 0; i < 3; ++i) {
-      for (int k = 0; k < np_; ++k) x(i) += l[i * np_ + k] * p_[k];
-    }
-    const Eigen::Matrix3d a = w * pose_->rotation + (1.0 - w) * rest_->rotation;
-    Eigen::Map<Eigen::Vector3d> r(residuals);
-    r = a * x + w * pose_->translation + (1.0 - w) * rest_->translation - obs_;
-    if (jacobians) {
-      if (jacobians[0]) {
-        Eigen::Map<Eigen::Vector3d> jw(jacobians[0]);
-        jw = (pose_->rotation - rest_->rotation) * x + pose_->translation - rest_->translation;
+  bool operator()(const double* x, double* residuals, double* jacobian) const {
+    const double w = x[0];
+    const Eigen::Index n = observed->cols();
+    const Eigen::Index rows = 3 * n;
+    for (Eigen::Index f = 0; f < n; ++f) {
+      const RigidTransform& pose = (*poses)[static_cast<size_t>(f)];
+      const double* p = params->col(f).data();
+      Eigen::Vector3d v(x[1], x[2], x[3]);
+      for (int i = 0; i < 3; ++i) {
+        for (int k = 0; k < np; ++k) v(i) += x[4 + i * np + k] * p[k];
       }
-      if (jacobians[1]) {
-        Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> jm(jacobians[1]);
-        jm = a;
-      }
-      if (jacobians[2]) {
-        const int cols = 3 * np_;
-        for (int row = 0; row < 3; ++row) {
-          for (int i = 0; i < 3; ++i) {
-            for (int k = 0; k < np_; ++k) jacobians[2][row * cols + i * np_ + k] = a(row, i) * p_[k];
-          }
+      const Eigen::Matrix3d a = w * pose.rotation + (1.0 - w) * rest->rotation;
+      Eigen::Map<Eigen::Vector3d> r(residuals + 3 * f);
+      r = a * v + w * pose.translation + (1.0 - w) * rest->translation - observed->col(f);
+      if (jacobian == nullptr) continue;
+      const Eigen::Vector3d jw = (pose.rotation - rest->rotation) * v + pose.translation - rest->translation;
+      for (int row = 0; row < 3; ++row) {
+        const Eigen::Index rr = 3 * f + row;
+        jacobian[rr] = jw(row);
+        for (int i = 0; i < 3; ++i) {
+          jacobian[(1 + i) * rows + rr] = a(row, i);
+          for (int k = 0; k < np; ++k) jacobian[(4 + i * np + k) * rows + rr] = a(row, i) * p[k];
         }
       }
     }
     return true;
   }
-
- private:
-  const RigidTransform* pose_;
-  const RigidTransform* rest_;
-  const double* p_;
-  int np_;
-  Eigen::Vector3d obs_;
 };
 
 // Least-squares parameters of every row of `data` (all coordinates visible).
@@ -286,29 +277,32 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
     const Eigen::MatrixXd params_rows = params.transpose();                 // P × n, one column per frame
     for (int j : fitted) {
       double w = model.head_weights(j);
-      Eigen::Vector3d m = shape.mean.segment<3>(3 * j);
-      Eigen::VectorXd l(3 * num_params);
+      Eigen::VectorXd x(4 + 3 * num_params);
+      x(0) = w;
+      x.segment<3>(1) = shape.mean.segment<3>(3 * j);
       for (int i = 0; i < 3; ++i) {
-        for (int k = 0; k < num_params; ++k) l(i * num_params + k) = shape.loadings(3 * j + i, k);
+        for (int k = 0; k < num_params; ++k) x(4 + i * num_params + k) = shape.loadings(3 * j + i, k);
       }
-      ceres::Problem problem;
+      Eigen::Matrix3Xd observed(3, n);
       for (int64_t f = 0; f < n; ++f) {
         const float* o = lab.at(f, j);
-        problem.AddResidualBlock(
-            new ThroatResidual(&poses[static_cast<size_t>(f)], &model.rest_pose, params_rows.col(f).data(), num_params,
-                               Eigen::Vector3d(o[0], o[1], o[2])),
-            nullptr, &w, m.data(), l.data());
+        observed.col(f) << o[0], o[1], o[2];
       }
-      problem.SetParameterLowerBound(&w, 0, 0.0);
-      problem.SetParameterUpperBound(&w, 0, 1.0);
-      ceres::Solver::Options so;
-      so.linear_solver_type = ceres::DENSE_QR;
-      so.max_num_iterations = 50;
-      so.function_tolerance = 1e-12;
-      so.gradient_tolerance = 1e-14;
-      so.parameter_tolerance = 1e-12;
-      ceres::Solver::Summary summary;
-      ceres::Solve(so, &problem, &summary);
+      ThroatProblem problem;
+      problem.poses = &poses;
+      problem.rest = &model.rest_pose;
+      problem.params = &params_rows;
+      problem.observed = &observed;
+      problem.np = num_params;
+      // Unconstrained Levenberg-Marquardt; the weight is then clamped to [0, 1]
+      // (only w is kept: the shape is refitted by the next round's PCA).
+      ceres::TinySolver<ThroatProblem> solver;
+      solver.options.max_num_iterations = 51;  // the start counts as one
+      solver.options.function_tolerance = 1e-12;
+      solver.options.gradient_tolerance = 1e-14;
+      solver.options.parameter_tolerance = 1e-12;
+      solver.Solve(problem, &x);
+      w = x(0);
       if (std::isfinite(w)) model.head_weights(j) = std::clamp(w, 0.0, 1.0);
       if (progress) progress->CheckCancel();
     }

@@ -1,7 +1,8 @@
 #include "models/rigid_motion.h"
 
-#include <ceres/ceres.h>
 #include <ceres/rotation.h>
+#include <ceres/tiny_solver.h>
+#include <ceres/tiny_solver_autodiff_function.h>
 
 #include <Eigen/SVD>
 #include <algorithm>
@@ -77,19 +78,50 @@ std::vector<int> UsableColumns(const Eigen::Matrix3Xd& reference, const Eigen::M
   return cols;
 }
 
-// Residual of one marker: R(aa) * ref + t - obs, in millimetres.
-struct MarkerResidual {
-  MarkerResidual(const Eigen::Vector3d& ref, const Eigen::Vector3d& obs) : ref_(ref), obs_(obs) {}
+// Robust rigid refinement as a plain least-squares problem for
+// ceres::TinySolver (header-only: the csw binary does not link the Ceres
+// library): marker c contributes the 3-vector sqrt(rho(s)/s) r_c, with r_c =
+// R(aa) ref_c + t - obs_c and s = |r_c|^2, whose squared norm is the robust
+// cost rho(s). Its minimum is the robust M-estimate that Ceres' HuberLoss and
+// CauchyLoss define (same rho); only the Gauss-Newton model differs.
+struct RobustMarkerResiduals {
+  const Eigen::Matrix3Xd* ref = nullptr;
+  const Eigen::Matrix3Xd* obs = nullptr;
+  const std::vector<int>* cols = nullptr;
+  RobustLoss loss = RobustLoss::kNone;
+  double a = 1.0;  // loss scale (mm)
+  int NumResiduals() const { return 3 * static_cast<int>(cols->size()); }
+
   template <typename T>
-  bool operator()(const T* const pose, T* residual) const {
-    const T p[3] = {T(ref_(0)), T(ref_(1)), T(ref_(2))};
-    T q[3];
-    ceres::AngleAxisRotatePoint(pose, p, q);
-    for (int i = 0; i < 3; ++i) residual[i] = q[i] + pose[3 + i] - T(obs_(i));
+  T Scale(const T& s) const {
+    using std::log1p;
+    using std::sqrt;
+    const double a2 = a * a;
+    if (loss == RobustLoss::kHuber) {
+      if (s <= T(a2)) return T(1.0);
+      return sqrt((T(2.0 * a) * sqrt(s) - T(a2)) / s);
+    }
+    if (loss == RobustLoss::kCauchy) {
+      if (s < T(1e-12 * a2)) return T(1.0) - s / T(4.0 * a2);  // series of sqrt(log1p(x)/x)
+      return sqrt(T(a2) * log1p(s / T(a2)) / s);
+    }
+    return T(1.0);
+  }
+
+  template <typename T>
+  bool operator()(const T* pose, T* residual) const {
+    for (size_t i = 0; i < cols->size(); ++i) {
+      const int c = (*cols)[i];
+      const T p[3] = {T((*ref)(0, c)), T((*ref)(1, c)), T((*ref)(2, c))};
+      T q[3];
+      ceres::AngleAxisRotatePoint(pose, p, q);
+      T r[3];
+      for (int k = 0; k < 3; ++k) r[k] = q[k] + pose[3 + k] - T((*obs)(k, c));
+      const T w = Scale(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+      for (int k = 0; k < 3; ++k) residual[3 * i + k] = w * r[k];
+    }
     return true;
   }
-  Eigen::Vector3d ref_;
-  Eigen::Vector3d obs_;
 };
 
 double RobustCost(double squared, const RigidOptions& options) {
@@ -182,26 +214,21 @@ RigidFit EstimateRigid(const Eigen::Matrix3Xd& reference, const Eigen::Matrix3Xd
   }
 
   Eigen::Matrix<double, 6, 1> pose = start.Parameters();
-  ceres::Problem problem;
-  for (int c : fit.used_markers) {
-    ceres::LossFunction* loss = nullptr;
-    if (options.loss == RobustLoss::kHuber) loss = new ceres::HuberLoss(options.loss_scale_mm);
-    if (options.loss == RobustLoss::kCauchy) loss = new ceres::CauchyLoss(options.loss_scale_mm);
-    problem.AddResidualBlock(
-        new ceres::AutoDiffCostFunction<MarkerResidual, 3, 6>(new MarkerResidual(reference.col(c), observed.col(c))),
-        loss, pose.data());
-  }
-  ceres::Solver::Options solver;
-  solver.linear_solver_type = ceres::DENSE_QR;
-  solver.max_num_iterations = std::max(1, options.max_iterations);
-  solver.function_tolerance = 1e-14;
-  solver.gradient_tolerance = 1e-16;
-  solver.parameter_tolerance = 1e-14;
-  solver.num_threads = 1;
-  solver.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
-  fit.converged = summary.termination_type == ceres::CONVERGENCE;
+  RobustMarkerResiduals residuals;
+  residuals.ref = &reference;
+  residuals.obs = &observed;
+  residuals.cols = &fit.used_markers;
+  residuals.loss = options.loss;
+  residuals.a = options.loss_scale_mm;
+  using Function = ceres::TinySolverAutoDiffFunction<RobustMarkerResiduals, Eigen::Dynamic, 6>;
+  const Function function(residuals);
+  ceres::TinySolver<Function> solver;
+  solver.options.max_num_iterations = std::max(1, options.max_iterations) + 1;  // the start counts as one
+  solver.options.function_tolerance = 1e-14;
+  solver.options.gradient_tolerance = 1e-16;
+  solver.options.parameter_tolerance = 1e-14;
+  solver.Solve(function, &pose);
+  fit.converged = solver.summary.status != ceres::TinySolver<Function>::HIT_MAX_ITERATIONS;
   if (pose.allFinite()) {
     const RigidTransform refined = RigidTransform::FromParameters(pose);
     // Keep the better of start and refined (Ceres never worsens, but guard NaN).

@@ -1,5 +1,6 @@
 #include "synth/phonetics.h"
 
+#include <dlfcn.h>
 #include <espeak-ng/speak_lib.h>
 
 #include <algorithm>
@@ -168,10 +169,51 @@ struct RawEvent {
   std::string name;
 };
 
+// libespeak-ng is loaded with dlopen on first use, not linked: it pulls in
+// ~25 shared libraries (PulseAudio, ALSA, X11, D-Bus, ...) that every csw
+// command would otherwise load at start-up, although only simulation and
+// synthesis phonetise. The declarations still come from its header.
+struct EspeakApi {
+  decltype(&::espeak_Initialize) Initialize = nullptr;
+  decltype(&::espeak_SetSynthCallback) SetSynthCallback = nullptr;
+  decltype(&::espeak_SetVoiceByName) SetVoiceByName = nullptr;
+  decltype(&::espeak_SetParameter) SetParameter = nullptr;
+  decltype(&::espeak_Synth) Synth = nullptr;
+  decltype(&::espeak_Synchronize) Synchronize = nullptr;
+};
+
+constexpr const char* kEspeakLibrary = "libespeak-ng.so.1";
+
+template <typename F>
+void LoadSymbol(void* handle, const char* name, F* out) {
+  void* sym = dlsym(handle, name);
+  if (sym == nullptr) throw Error(std::string("espeak-ng: ") + kEspeakLibrary + " has no symbol " + name);
+  *out = reinterpret_cast<F>(sym);
+}
+
+EspeakApi LoadEspeak() {
+  void* handle = dlopen(kEspeakLibrary, RTLD_NOW | RTLD_LOCAL);
+  if (handle == nullptr) {
+    const char* why = dlerror();
+    throw Error(std::string("espeak-ng: cannot load ") + kEspeakLibrary + " (" + (why ? why : "unknown error") +
+                "); install the Debian package libespeak-ng1");
+  }
+  // Never closed: espeak-ng keeps global state for the life of the process.
+  EspeakApi api;
+  LoadSymbol(handle, "espeak_Initialize", &api.Initialize);
+  LoadSymbol(handle, "espeak_SetSynthCallback", &api.SetSynthCallback);
+  LoadSymbol(handle, "espeak_SetVoiceByName", &api.SetVoiceByName);
+  LoadSymbol(handle, "espeak_SetParameter", &api.SetParameter);
+  LoadSymbol(handle, "espeak_Synth", &api.Synth);
+  LoadSymbol(handle, "espeak_Synchronize", &api.Synchronize);
+  return api;
+}
+
 // Global espeak-ng session state (espeak-ng itself is global).
 struct EspeakSession {
   std::mutex mutex;
   bool initialised = false;
+  EspeakApi api;
   int rate_hz = 0;
   std::vector<short> samples;
   std::vector<RawEvent> events;
@@ -209,10 +251,11 @@ int SynthCallback(short* wav, int count, espeak_EVENT* events) {
 
 void EnsureInitialised(EspeakSession& s) {
   if (s.initialised) return;
-  const int rate = espeak_Initialize(AUDIO_OUTPUT_SYNCHRONOUS, 0, nullptr,
-                                     espeakINITIALIZE_PHONEME_EVENTS | espeakINITIALIZE_DONT_EXIT);
+  s.api = LoadEspeak();
+  const int rate = s.api.Initialize(AUDIO_OUTPUT_SYNCHRONOUS, 0, nullptr,
+                                    espeakINITIALIZE_PHONEME_EVENTS | espeakINITIALIZE_DONT_EXIT);
   if (rate <= 0) throw Error("espeak-ng: cannot initialise (espeak-ng-data not found?)");
-  espeak_SetSynthCallback(SynthCallback);
+  s.api.SetSynthCallback(SynthCallback);
   s.rate_hz = rate;
   s.initialised = true;
 }
@@ -258,18 +301,18 @@ Utterance Phonetise(const std::string& text, const PhonetiseOptions& options) {
   EspeakSession& s = Session();
   std::lock_guard<std::mutex> lock(s.mutex);
   EnsureInitialised(s);
-  if (espeak_SetVoiceByName(options.voice.c_str()) != EE_OK)
+  if (s.api.SetVoiceByName(options.voice.c_str()) != EE_OK)
     throw Error("espeak-ng: voice '" + options.voice + "' is not available");
-  espeak_SetParameter(espeakRATE, options.rate_wpm, 0);
-  espeak_SetParameter(espeakPITCH, options.pitch, 0);
+  s.api.SetParameter(espeakRATE, options.rate_wpm, 0);
+  s.api.SetParameter(espeakPITCH, options.pitch, 0);
   s.samples.clear();
   s.events.clear();
   // Text up to the first NUL (espeak-ng reads a C string).
   const std::string input(text.c_str());
   const espeak_ERROR err =
-      espeak_Synth(input.c_str(), input.size() + 1, 0, POS_CHARACTER, 0, espeakCHARS_UTF8, nullptr, nullptr);
+      s.api.Synth(input.c_str(), input.size() + 1, 0, POS_CHARACTER, 0, espeakCHARS_UTF8, nullptr, nullptr);
   if (err != EE_OK) throw Error("espeak-ng: synthesis failed (error " + std::to_string(err) + ")");
-  espeak_Synchronize();
+  s.api.Synchronize();
 
   Utterance u;
   u.text = text;
