@@ -61,9 +61,9 @@ class GapFiller {
 };
 
 struct FillReport {
-  std::vector<FillRecord> filled;                         // in gap order (marker, then time)
-  std::vector<std::pair<Gap, std::string>> unfilled;      // gap, reasons ("spline: …; dct: …")
-  int64_t filled_samples() const;                         // frames written over all filled gaps
+  std::vector<FillRecord> filled;                     // in gap order (marker, then time)
+  std::vector<std::pair<Gap, std::string>> unfilled;  // gap, reasons ("spline: …; dct: …")
+  int64_t filled_samples() const;                     // frames written over all filled gaps
   int64_t unfilled_samples() const;
 };
 
@@ -76,9 +76,9 @@ FillReport FillGaps(const MarkerArray& in, const std::vector<const GapFiller*>& 
 // For the gap report: which methods can handle each gap (no filling).
 struct GapMethods {
   Gap gap;
-  std::vector<std::string> can_fill;                           // method names, in the order given
-  std::vector<std::pair<std::string, std::string>> cannot;     // method name, why not
-  bool too_long = false;                                       // longer than max_gap_frames (no method asked)
+  std::vector<std::string> can_fill;                        // method names, in the order given
+  std::vector<std::pair<std::string, std::string>> cannot;  // method name, why not
+  bool too_long = false;                                    // longer than max_gap_frames (no method asked)
 };
 std::vector<GapMethods> AssessGaps(const MarkerArray& in, const std::vector<Gap>& gaps,
                                    const std::vector<const GapFiller*>& methods, int64_t max_gap_frames);

@@ -22,8 +22,8 @@ struct Gap {
   int marker = 0;
   int64_t start = 0;
   int64_t length = 0;
-  bool leading = false;   // no valid frame of this marker before the gap (it starts at frame 0)
-  bool trailing = false;  // no valid frame after the gap (it runs to the last frame)
+  bool leading = false;                           // no valid frame of this marker before the gap (it starts at frame 0)
+  bool trailing = false;                          // no valid frame after the gap (it runs to the last frame)
   int64_t end() const { return start + length; }  // one past the last missing frame
   bool interior() const { return !leading && !trailing; }
 };
