@@ -1,5 +1,6 @@
 #include "analysis/cleaning/dct_fill.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -107,6 +108,18 @@ DctSmoothResult DctSmooth(const Eigen::MatrixXd& y, const Eigen::VectorXd& w, do
   const double log_s_min = std::log10(s_bound(0.99));
   const double log_s_max = std::min(12.0, std::log10(s_bound(1e-6)));
 
+  // DᵀD = D² for the symmetric reflective second-difference matrix D.
+  Eigen::MatrixXd second_diff_sq;
+  if (weighted) {
+    Eigen::MatrixXd d = Eigen::MatrixXd::Zero(n, n);
+    for (int i = 0; i < n; ++i) {
+      d(i, i) = (i == 0 || i == n - 1) ? -1.0 : -2.0;
+      if (i > 0) d(i, i - 1) = 1.0;
+      if (i + 1 < n) d(i, i + 1) = 1.0;
+    }
+    if (n == 1) d(0, 0) = 0.0;
+    second_diff_sq = d * d;
+  }
   DctSmoothResult result;
   result.z.resize(n, y.cols());
   result.s.resize(y.cols());
@@ -181,6 +194,15 @@ DctSmoothResult DctSmooth(const Eigen::MatrixXd& y, const Eigen::VectorXd& w, do
         converged = true;
         break;
       }
+    }
+    if (weighted) {
+      // The iteration's limit, computed directly: (W + s DᵀD) z = W y with D
+      // the reflective second difference (D = Cᵀ Λ C, so DᵀD = Cᵀ Λ² C). The
+      // iteration converges slowly when s is small (little smoothing, long
+      // gaps); its fixed point is this solution (tests/analysis/dct_fill_test.cc).
+      Eigen::MatrixXd a = s * second_diff_sq;
+      a.diagonal() += wn;
+      z = a.ldlt().solve(wn.cwiseProduct(yc));
     }
     if (smoothing > 0 || std::isnan(gcv)) {
       // GCV at the final s (fixed s, or reported for the converged fit).

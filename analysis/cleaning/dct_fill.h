@@ -17,7 +17,10 @@
 // converges to the weighted solution, from a linear interpolation across the
 // missing frames (Garcia starts from the nearest valid value and a coarse DCT
 // smoothing; in one dimension the linear interpolant is closer and converges
-// sooner). s is chosen by minimising Garcia's GCV score
+// sooner). The iteration converges slowly when s is small; once it has
+// chosen s (at most 100 iterations, smoothn's default), the fill is its
+// limit, the solution of (W + s DᵀD) z = W y, computed directly (a dense
+// LDLᵀ of the window, Eigen). s is chosen by minimising Garcia's GCV score
 //     GCV(s) = (RSS / n_valid) / (1 − tr H / N)²,  tr H = Σ_k Γ_k,
 // re-estimated at iterations 1, 2, 4, 8, … as in smoothn, over the bounds
 // smoothn derives from leverages h ∈ [1e-6, 0.99] (capped at s = 1e12).
@@ -41,9 +44,11 @@ struct DctFillOptions {
   int context_frames = 30;
   int64_t max_gap_frames = 0;  // 0 = no limit of the method's own
   double smoothing = 0.0;      // fixed s > 0, or 0 to choose s by GCV
-  int max_iterations = 2000;
+  // Garcia's iteration (smoothn's defaults: at most 100 iterations); it
+  // chooses s, and the fill is then the iteration's limit at that s.
+  int max_iterations = 100;
   // Stop when no value of the window moves by more than this (mm) in one iteration.
-  double tolerance_mm = 1e-5;
+  double tolerance_mm = 1e-3;
   std::string Check() const;  // "" when valid, else the reason
 };
 
@@ -63,8 +68,12 @@ struct DctSmoothResult {
 // ignored) with weights w (N, ≥ 0; 0 = missing). smoothing > 0: fixed s;
 // 0: s by GCV per column. Throws InvalidInput when no frame has weight > 0,
 // when the sizes disagree or an option is out of range.
+// With missing frames, the returned z is the limit of the iteration at the
+// final s (solved directly: (W + s DᵀD) z = W y), so it does not depend on
+// how far the iteration ran; `iterations` and `converged` say how the
+// iteration that chose s ended.
 DctSmoothResult DctSmooth(const Eigen::MatrixXd& y, const Eigen::VectorXd& w, double smoothing = 0.0,
-                          int max_iterations = 2000, double tolerance = 1e-5);
+                          int max_iterations = 100, double tolerance = 1e-3);
 
 class DctFiller : public GapFiller {
  public:
