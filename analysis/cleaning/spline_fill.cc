@@ -84,8 +84,9 @@ class BandLdlt {
 
   // Diagonal of A⁻¹ (Takahashi, Fagan & Chin 1973; Hutchinson & de Hoog 1985):
   // Z = D⁻¹L⁻¹ + (I − Lᵀ) Z, evaluated from the last row up inside the band.
-  void InverseDiagonal(std::vector<double>* diag) const {
-    std::vector<double> z(static_cast<size_t>(n_) * (m_ + 1), 0.0);  // z(i, k) = Z(i, i + k)
+  void InverseDiagonal(std::vector<double>* diag) {
+    std::vector<double>& z = z_;  // z(i, k) = Z(i, i + k)
+    z.assign(static_cast<size_t>(n_) * (m_ + 1), 0.0);
     auto zget = [&](int a, int b) {
       if (a > b) std::swap(a, b);
       return z[Idx(a, b - a)];
@@ -109,7 +110,7 @@ class BandLdlt {
   size_t Idx(int i, int k) const { return static_cast<size_t>(i) * (m_ + 1) + k; }
   double L(int i, int j) const { return l_[Idx(i, i - j)]; }  // j < i, i − j ≤ m
   int n_, m_;
-  std::vector<double> l_, d_;
+  std::vector<double> l_, d_, z_;
 };
 
 // The band of DᵀD for the m-th difference matrix D ((n − m) × n).
@@ -154,11 +155,12 @@ class PenalisedProblem {
 
   // Fits with smoothing p; fills z (centred), the trace and per-column GCV.
   bool Evaluate(double p, Eigen::MatrixXd* z, double* trace, Eigen::VectorXd* gcv) {
-    std::vector<double> a(penalty_.size());
+    std::vector<double>& a = a_;
+    a.resize(penalty_.size());
     for (size_t k = 0; k < a.size(); ++k) a[k] = p * penalty_[k];
     for (int i = 0; i < n_; ++i) a[static_cast<size_t>(i) * (m_ + 1)] += w_[i];
     if (!ldlt_.Factor(a)) return false;
-    std::vector<double> zd;
+    std::vector<double>& zd = zd_;
     ldlt_.InverseDiagonal(&zd);
     double tr = 0.0;
     for (int i = 0; i < n_; ++i) tr += w_[i] * zd[i];
@@ -189,6 +191,7 @@ class PenalisedProblem {
   int64_t valid_ = 0;
   Eigen::VectorXd mean_;
   Eigen::MatrixXd wy_, yc_;
+  std::vector<double> a_, zd_;
 };
 
 }  // namespace
@@ -236,13 +239,13 @@ PenalisedFit PenalisedSmooth(const Eigen::MatrixXd& y, const Eigen::VectorXd& w,
     for (Eigen::Index c = 0; c < cols; ++c) store(c, smoothing);
     return fit;
   }
-  // GCV: a half-decade grid of log10 p over cut-offs from the Nyquist
+  // GCV: a one-decade grid of log10 p over cut-offs from the Nyquist
   // frequency (p·π^(2m) = 1, no smoothing) down to about 1/N rad per frame
   // (a polynomial fit of the window), capped at 1e10 for conditioning; then
-  // golden-section refinement around each column's best grid point.
+  // one parabolic step around the best grid point.
   const double lo = -2.0 * order * std::log10(M_PI);
   const double hi = std::min(10.0, 2.0 * order * std::log10(std::max(n, 4)));
-  const double step = 0.5;
+  const double step = 1.0;
   std::vector<double> grid;
   for (double e = lo; e < hi + 1e-9; e += step) grid.push_back(e);
   std::vector<Eigen::VectorXd> scores(grid.size());
@@ -260,35 +263,18 @@ PenalisedFit PenalisedSmooth(const Eigen::MatrixXd& y, const Eigen::VectorXd& w,
       if (ok[g] && (best < 0 || crit(scores[g], c) < crit(scores[static_cast<size_t>(best)], c)))
         best = static_cast<int>(g);
     if (best < 0) throw fail(std::pow(10.0, grid.back()));
-    double a = grid[static_cast<size_t>(std::max(best - 1, 0))];
-    double b = grid[static_cast<size_t>(std::min<int>(best + 1, static_cast<int>(grid.size()) - 1))];
     double best_e = grid[static_cast<size_t>(best)];
-    double best_score = crit(scores[static_cast<size_t>(best)], c);
-    const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
-    auto score_at = [&](double e) {
-      if (!problem.Evaluate(std::pow(10.0, e), &z, &trace, &gcv)) return std::numeric_limits<double>::infinity();
-      const double v = crit(gcv, c);
-      if (v < best_score) {
-        best_score = v;
-        best_e = e;
-      }
-      return v;
-    };
-    double x1 = b - phi * (b - a), x2 = a + phi * (b - a);
-    double f1 = score_at(x1), f2 = score_at(x2);
-    for (int it = 0; it < 8; ++it) {
-      if (f1 < f2) {
-        b = x2;
-        x2 = x1;
-        f2 = f1;
-        x1 = b - phi * (b - a);
-        f1 = score_at(x1);
-      } else {
-        a = x1;
-        x1 = x2;
-        f1 = f2;
-        x2 = a + phi * (b - a);
-        f2 = score_at(x2);
+    const double fb = crit(scores[static_cast<size_t>(best)], c);
+    if (best > 0 && best + 1 < static_cast<int>(grid.size()) && ok[static_cast<size_t>(best) - 1] &&
+        ok[static_cast<size_t>(best) + 1]) {
+      // Parabolic refinement through the best grid point and its neighbours
+      // (one step of Brent's method on log10 p).
+      const double fa = crit(scores[static_cast<size_t>(best) - 1], c);
+      const double fc = crit(scores[static_cast<size_t>(best) + 1], c);
+      const double curv = fa - 2.0 * fb + fc;
+      if (curv > 0) {
+        const double e = best_e - 0.5 * step * (fc - fa) / curv;
+        if (problem.Evaluate(std::pow(10.0, e), &z, &trace, &gcv) && crit(gcv, c) < fb) best_e = e;
       }
     }
     if (!problem.Evaluate(std::pow(10.0, best_e), &z, &trace, &gcv)) throw fail(std::pow(10.0, best_e));

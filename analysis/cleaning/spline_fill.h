@@ -30,7 +30,8 @@
 //    (W + p DᵀD)⁻¹ over the valid frames, computed exactly from the banded
 //    LDLᵀ factor by the Takahashi / Hutchinson & de Hoog (1985, Numer. Math.
 //    47:99-106) recursion in O(N m²). The search is a grid over log10 p
-//    (half-decade steps) refined by golden-section search per coordinate.
+//    (one-decade steps) refined by one parabolic step through the best grid
+//    point and its neighbours.
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
