@@ -43,7 +43,7 @@ struct RigidFillOptions {
   double min_off_line_mm = 1.0;
   // Refuse a frame where the fit would amplify the neighbours' noise more than this at the
   // filled marker (see above; a 10-marker head cluster is at ~0.4, 3 well-spread markers ~1-3).
-  double max_error_gain = 5.0;
+  double max_error_gain = 3.0;
   // Reference estimation: frames used (evenly spread over the take when more qualify), frames
   // each marker must be seen in to get a reference position, GPA iterations and tolerance.
   int max_reference_frames = 2000;

@@ -284,3 +284,74 @@ TEST(RigidFill, RecordsTheFillAndRejectsBadInput) {
 
 }  // namespace
 }  // namespace csw::cleaning
+
+namespace csw::cleaning {
+namespace {
+
+// Issue 12's acceptance: on virtual-cuer takes (0.2 mm noise, camera occlusions, dropouts),
+// artificial gaps of 1-5, 6-20 and 21-60 frames punched into head- and forearm-cluster markers
+// where they were captured are filled by the rigid fill within 0.5 mm of the clean capture on
+// average. The reference shape is estimated from the punched take itself. Beside it, the error of
+// the captured (noisy) marker at the same frames: the fill is below it (it averages the noise of
+// 3-9 neighbours).
+TEST(RigidFillCuer, ClusterMarkersWithinHalfMillimetre) {
+  using namespace csw::cleaning::testing;
+  const MarkerSet set = CuerMarkerSet();  // the test may use the cuer's names; the fill only sees columns
+  struct Cluster {
+    const char* name;
+    std::vector<std::string> markers;
+    std::vector<BinScore> bins = std::vector<BinScore>(GapBins().size());
+    std::vector<BinScore> captured = std::vector<BinScore>(GapBins().size());
+  };
+  std::vector<Cluster> clusters = {{"head", set.head_cluster}, {"forearm", set.forearm_cluster}};
+  std::mt19937_64 rng(2024);
+  for (const SimulationResult& r : CuerTakes()) {
+    const MarkerBinding b = BindMarkerSet(set, r.take.marker_names, true, r.take.name);
+    for (Cluster& c : clusters) {
+      const std::vector<int> cols = b.Columns(c.markers);
+      for (int round = 0; round < 4; ++round) {
+        MarkerArray punched;
+        std::vector<int> bin;
+        const std::vector<Gap> gaps = PunchGaps(r.take.markers, cols, rng, 1, 3, 10, &punched, &bin);
+        const RigidClusterFiller filler = RigidClusterFiller::FromMarkers(punched, {cols});
+        ASSERT_EQ(filler.clusters()[0].problem, "");
+        MarkerArray out = punched;
+        for (size_t i = 0; i < gaps.size(); ++i) {
+          BinScore& s = c.bins[static_cast<size_t>(bin[i])];
+          ++s.gaps;
+          FillRecord rec{};
+          if (!filler.Fill(punched, gaps[i], &out, &rec)) continue;
+          ++s.filled;
+          ScoreGap(r.clean, out, gaps[i], &s);
+          ScoreGap(r.clean, r.take.markers, gaps[i], &c.captured[static_cast<size_t>(bin[i])]);
+        }
+      }
+    }
+  }
+  std::printf(
+      "| cluster | gap frames | gaps filled | frames | mean (mm) | p99 (mm) | max (mm) | captured marker mean (mm) "
+      "|\n");
+  for (const Cluster& c : clusters) {
+    BinScore all;
+    for (size_t b = 0; b < GapBins().size(); ++b) {
+      const BinScore& s = c.bins[b];
+      std::printf("| %s | %s | %d/%d | %zu | %.3f | %.3f | %.3f | %.3f |\n", c.name, GapBins()[b].label, s.filled,
+                  s.gaps, s.errors.size(), s.Mean(), s.Percentile(0.99), s.Max(), c.captured[b].Mean());
+      all.errors.insert(all.errors.end(), s.errors.begin(), s.errors.end());
+      // Nearly every gap fills (measured: 447 of 448; the other has a frame with noise gain 3.06)
+      // and the acceptance holds in every bin.
+      EXPECT_GE(s.filled, s.gaps * 90 / 100) << c.name << " " << GapBins()[b].label;
+      EXPECT_LE(s.Mean(), 0.5) << c.name << " " << GapBins()[b].label;
+      // Regression bounds, measured 0.175-0.244 mm mean, p99 <= 0.77 mm, max 1.79 mm (forearm).
+      EXPECT_LE(s.Mean(), 0.30) << c.name << " " << GapBins()[b].label;
+      EXPECT_LE(s.Percentile(0.99), 1.0) << c.name << " " << GapBins()[b].label;
+      EXPECT_LE(s.Max(), 2.5) << c.name << " " << GapBins()[b].label;
+      // Below the noise of the captured marker itself (3-D mean 0.32 mm for 0.2 mm per axis).
+      EXPECT_LT(s.Mean(), c.captured[b].Mean()) << c.name << " " << GapBins()[b].label;
+    }
+    EXPECT_LE(all.Mean(), 0.5) << c.name;
+  }
+}
+
+}  // namespace
+}  // namespace csw::cleaning
