@@ -200,6 +200,24 @@ ClusterReference EstimateClusterReference(const MarkerArray& in, const std::vect
       if (static_cast<int>(aligned[static_cast<size_t>(3 * j)].size()) < o.min_reference_frames) continue;
       for (int c = 0; c < 3; ++c) next(c, j) = Median(aligned[static_cast<size_t>(3 * j + c)]);
     }
+    // Fix the gauge: the median of the aligned frames may come out slightly turned; align it
+    // back onto the previous consensus (on the markers both know) before comparing.
+    {
+      std::vector<int> both;
+      for (int j = 0; j < n; ++j)
+        if (!std::isnan(next(0, j)) && !std::isnan(consensus(0, j))) both.push_back(j);
+      if (both.size() >= 3) {
+        Eigen::Matrix3Xd src(3, static_cast<Eigen::Index>(both.size())), dst(3, src.cols());
+        for (size_t k = 0; k < both.size(); ++k) {
+          src.col(static_cast<Eigen::Index>(k)) = next.col(both[k]);
+          dst.col(static_cast<Eigen::Index>(k)) = consensus.col(both[k]);
+        }
+        Eigen::Isometry3d t;
+        t.matrix() = Eigen::umeyama(src, dst, false);
+        for (int j = 0; j < n; ++j)
+          if (!std::isnan(next(0, j))) next.col(j) = t * Eigen::Vector3d(next.col(j));
+      }
+    }
     centre(&next);
     double change = 0.0;
     bool same_support = true;

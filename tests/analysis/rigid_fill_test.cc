@@ -69,6 +69,7 @@ TEST(RigidFill, ReproducesHiddenMarkerOfNoiseFreeRigidBody) {
   ASSERT_EQ(ref.problem, "");
   EXPECT_EQ(ref.min_visible_used, 6);
   EXPECT_LT(ref.median_residual_mm, 1e-4);
+  EXPECT_LT(ref.iterations, RigidFillOptions().max_iterations);  // converged (to 1e-4 mm)
   // The reference is the body up to a rigid motion: same inter-marker distances.
   for (int i = 0; i < 6; ++i)
     for (int j = i + 1; j < 6; ++j)
@@ -315,6 +316,7 @@ TEST(RigidFillCuer, ClusterMarkersWithinHalfMillimetre) {
         const std::vector<Gap> gaps = PunchGaps(r.take.markers, cols, rng, 1, 3, 10, &punched, &bin);
         const RigidClusterFiller filler = RigidClusterFiller::FromMarkers(punched, {cols});
         ASSERT_EQ(filler.clusters()[0].problem, "");
+        EXPECT_LT(filler.clusters()[0].iterations, RigidFillOptions().max_iterations);  // converged
         MarkerArray out = punched;
         for (size_t i = 0; i < gaps.size(); ++i) {
           BinScore& s = c.bins[static_cast<size_t>(bin[i])];
