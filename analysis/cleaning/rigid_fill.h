@@ -42,7 +42,8 @@ struct RigidFillOptions {
   // Refuse a frame whose neighbours lie within this RMS distance of one line (collinear).
   double min_off_line_mm = 1.0;
   // Refuse a frame where the fit would amplify the neighbours' noise more than this at the
-  // filled marker (see above; a 10-marker head cluster is at ~0.4, 3 well-spread markers ~1-3).
+  // filled marker (see above; on the virtual cuer: 0.4-0.9 with a whole 10-marker head cluster,
+  // median 1.3 and up to 11 over its 3-marker subsets).
   double max_error_gain = 3.0;
   // Reference estimation: frames used (evenly spread over the take when more qualify), frames
   // each marker must be seen in to get a reference position, GPA iterations and tolerance.
