@@ -92,8 +92,16 @@ std::string ColumnList(const std::vector<int>& columns) {
 
 bool ClusterReference::Has(int column) const {
   const int i = IndexOf(column);
-  return i >= 0 && problem.empty() && !std::isnan(shape(0, i));
+  return i >= 0 && i < shape.cols() && problem.empty() && !std::isnan(shape(0, i));
 }
+
+namespace {
+void CheckReference(const ClusterReference& ref) {
+  if (ref.shape.cols() != static_cast<Eigen::Index>(ref.columns.size()))
+    throw InvalidInput("rigid fill: the cluster reference has " + std::to_string(ref.shape.cols()) + " positions for " +
+                       std::to_string(ref.columns.size()) + " columns");
+}
+}  // namespace
 
 int ClusterReference::IndexOf(int column) const {
   auto it = std::find(columns.begin(), columns.end(), column);
@@ -246,6 +254,10 @@ ClusterReference EstimateClusterReference(const MarkerArray& in, const std::vect
 
 RigidFrameFit FitClusterFrame(const MarkerArray& in, const ClusterReference& ref, int64_t frame, int exclude,
                               const RigidFillOptions& o) {
+  CheckReference(ref);
+  if (frame < 0 || frame >= in.frames())
+    throw InvalidInput("rigid fill: frame " + std::to_string(frame) + " is outside the " + std::to_string(in.frames()) +
+                       "-frame marker array");
   RigidFrameFit fit;
   const std::string at = "frame " + std::to_string(frame) + ": ";
   if (!ref.problem.empty()) {
@@ -308,6 +320,7 @@ std::vector<double> ClusterResiduals(const MarkerArray& in, const ClusterReferen
 
 RigidGapFit FitRigidGap(const MarkerArray& in, const ClusterReference& ref, const Gap& gap, const RigidFillOptions& o) {
   CheckGap(in, gap, "rigid fill");
+  CheckReference(ref);
   RigidGapFit g;
   if (!ref.problem.empty()) {
     g.why_not = ref.problem;

@@ -278,6 +278,10 @@ TEST(RigidFill, RecordsTheFillAndRejectsBadInput) {
   EXPECT_THROW(filler.CanFill(in, {2, 95, 10}, &why), InvalidInput);
   MarkerArray small(10, 6);
   EXPECT_THROW(filler.Fill(in, {2, 20, 10}, &small, &rec), InvalidInput);
+  ClusterReference hollow;
+  hollow.columns = kAll;  // no shape
+  EXPECT_THROW(FitRigidGap(in, hollow, {2, 20, 10}), InvalidInput);
+  EXPECT_THROW(FitClusterFrame(in, filler.clusters()[1], 100, 2), InvalidInput);
   // A cluster never seen with 3 markers: the reference says why.
   ClusterReference none = EstimateClusterReference(wide, kAll);
   EXPECT_NE(none.problem.find("fewer than 10 frames"), std::string::npos) << none.problem;
