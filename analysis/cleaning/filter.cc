@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "core/error.h"
 
@@ -34,13 +35,47 @@ void CheckFinite(const std::vector<double>& x, const char* what) {
     if (std::isinf(x[i])) throw InvalidInput(std::string(what) + ": sample " + std::to_string(i) + " is infinite");
 }
 
+[[noreturn]] __attribute__((noinline)) void ThrowInfinite(int64_t f, int64_t k, const char* what) {
+  throw InvalidInput(std::string(what) + ": marker " + std::to_string(k) + " frame " + std::to_string(f) +
+                     " has an infinite coordinate");
+}
+
 // True when the three coordinates of a frame are present; throws on infinities.
-bool FrameValid(const MarkerArray& m, int64_t f, int64_t k, const char* what) {
+inline bool FrameValid(const MarkerArray& m, int64_t f, int64_t k, const char* what) {
   const float* p = m.at(f, k);
-  if (std::isinf(p[0]) || std::isinf(p[1]) || std::isinf(p[2]))
-    throw InvalidInput(std::string(what) + ": marker " + std::to_string(k) + " frame " + std::to_string(f) +
-                       " has an infinite coordinate");
-  return !std::isnan(p[0]) && !std::isnan(p[1]) && !std::isnan(p[2]);
+  if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])) return true;
+  if (std::isinf(p[0]) || std::isinf(p[1]) || std::isinf(p[2])) ThrowInfinite(f, k, what);
+  return false;
+}
+
+// Markers are processed in blocks of kBlock: a block's channels are gathered
+// frame by frame (contiguous reads) into channel-major buffers, so each channel
+// is then filtered in contiguous memory.
+constexpr int64_t kBlock = 8;
+
+// buf[(k - k0) * 3 + c][f] = coordinate c of marker k at frame f, NaN (all three)
+// where the frame is not valid.
+void GatherBlock(const MarkerArray& m, int64_t k0, int64_t k1, const char* what,
+                 std::vector<std::vector<double>>& buf) {
+  const auto frames = static_cast<size_t>(m.frames());
+  buf.resize(static_cast<size_t>(3 * (k1 - k0)));
+  for (auto& b : buf) b.resize(frames);
+  for (int64_t f = 0; f < m.frames(); ++f)
+    for (int64_t k = k0; k < k1; ++k) {
+      const bool valid = FrameValid(m, f, k, what);
+      const float* p = m.at(f, k);
+      for (int c = 0; c < 3; ++c)
+        buf[static_cast<size_t>(3 * (k - k0) + c)][static_cast<size_t>(f)] = valid ? p[c] : kNaN;
+    }
+}
+
+void ScatterBlock(const std::vector<std::vector<double>>& buf, int64_t k0, int64_t k1, MarkerArray& m) {
+  for (int64_t f = 0; f < m.frames(); ++f)
+    for (int64_t k = k0; k < k1; ++k) {
+      float* p = m.at(f, k);
+      for (int c = 0; c < 3; ++c)
+        p[c] = static_cast<float>(buf[static_cast<size_t>(3 * (k - k0) + c)][static_cast<size_t>(f)]);
+    }
 }
 
 std::vector<SampleRun> RunsOf(const std::vector<bool>& valid) {
@@ -222,7 +257,7 @@ Eigen::VectorXd ButterworthFilter(const Eigen::VectorXd& x, double rate_hz, cons
   return Eigen::Map<Eigen::VectorXd>(out.data(), static_cast<Eigen::Index>(out.size()));
 }
 
-MarkerArray ButterworthFilter(const MarkerArray& markers, double rate_hz, const ButterworthOptions& options,
+void ButterworthFilterInPlace(MarkerArray& markers, double rate_hz, const ButterworthOptions& options,
                               FilterReport* report) {
   const std::vector<Biquad> sections = DesignButterworth(options, rate_hz);
   const int64_t pad = ButterworthPadding(options, rate_hz);
@@ -231,21 +266,27 @@ MarkerArray ButterworthFilter(const MarkerArray& markers, double rate_hz, const 
     *report = FilterReport();
     report->min_run_length = min_run;
   }
-  MarkerArray out(markers.frames(), markers.markers());
-  const auto frames = static_cast<size_t>(markers.frames());
-  std::vector<double> x(frames), y, work;
-  for (int64_t k = 0; k < markers.markers(); ++k) {
-    const std::vector<SampleRun> runs = ValidRuns(markers, k);
-    for (int c = 0; c < 3; ++c) {
-      for (int64_t f = 0; f < markers.frames(); ++f) x[static_cast<size_t>(f)] = kNaN;
-      for (const SampleRun& r : runs)
-        for (int64_t f = r.start; f < r.start + r.length; ++f) x[static_cast<size_t>(f)] = markers.at(f, k)[c];
-      FilterChannel(sections, pad, min_run, x, runs, y, work, report, k, c == 0);
-      for (const SampleRun& r : runs)
-        for (int64_t f = r.start; f < r.start + r.length; ++f)
-          out.at(f, k)[c] = static_cast<float>(y[static_cast<size_t>(f)]);
+  std::vector<std::vector<double>> buf;
+  std::vector<double> y, work;
+  for (int64_t k0 = 0; k0 < markers.markers(); k0 += kBlock) {
+    const int64_t k1 = std::min(k0 + kBlock, markers.markers());
+    GatherBlock(markers, k0, k1, "Butterworth filter", buf);
+    for (int64_t k = k0; k < k1; ++k) {
+      const std::vector<SampleRun> runs = ValidRuns(buf[static_cast<size_t>(3 * (k - k0))]);
+      for (int c = 0; c < 3; ++c) {
+        std::vector<double>& x = buf[static_cast<size_t>(3 * (k - k0) + c)];
+        FilterChannel(sections, pad, min_run, x, runs, y, work, report, k, c == 0);
+        x.swap(y);
+      }
     }
+    ScatterBlock(buf, k0, k1, markers);
   }
+}
+
+MarkerArray ButterworthFilter(const MarkerArray& markers, double rate_hz, const ButterworthOptions& options,
+                              FilterReport* report) {
+  MarkerArray out = markers;
+  ButterworthFilterInPlace(out, rate_hz, options, report);
   return out;
 }
 
@@ -383,15 +424,32 @@ KalmanChannel SmoothChannel(const std::vector<double>& y, double rate_hz, const 
   if (q <= 0) {
     // Maximum likelihood over the equivalent bandwidth (log scale), golden
     // section between 0.05 Hz and 0.45 rate.
+    // Long channels: the likelihood of 10 evenly spaced windows of 1,200
+    // samples (each started afresh) stands for the whole.
+    std::vector<std::pair<int64_t, int64_t>> windows;
+    constexpr int64_t kWindow = 1200, kWindows = 10;
+    if (last - first + 1 <= kWindow * kWindows) {
+      windows.push_back({first, last});
+    } else {
+      const int64_t step = (last - first + 1 - kWindow) / (kWindows - 1);
+      for (int64_t w = 0; w < kWindows; ++w) {
+        int64_t a = first + w * step, b = std::min(last, a + kWindow - 1);
+        while (a < b && std::isnan(y[static_cast<size_t>(a)])) ++a;
+        while (b > a && std::isnan(y[static_cast<size_t>(b)])) --b;
+        if (b > a) windows.push_back({a, b});
+      }
+    }
     auto nll = [&](double log_f) {
       Model<D> m(dt, ProcessNoiseForBandwidth(D, r, dt, std::exp(log_f)));
-      return Forward<D>(m, y, first, last, r, false, nullptr, nullptr, nullptr, nullptr);
+      double sum = 0;
+      for (const auto& [a, b] : windows) sum += Forward<D>(m, y, a, b, r, false, nullptr, nullptr, nullptr, nullptr);
+      return sum;
     };
     double a = std::log(0.05), b = std::log(0.45 * rate_hz);
     const double g = (std::sqrt(5.0) - 1) / 2;
     double c = b - g * (b - a), d = a + g * (b - a);
     double fc = nll(c), fd = nll(d);
-    for (int it = 0; it < 24; ++it) {
+    for (int it = 0; it < 16; ++it) {  // bracket 0.618^16 = 5e-4 of ln(0.45 rate / 0.05 Hz)
       if (fc < fd) {
         b = d;
         d = c;
@@ -451,18 +509,12 @@ KalmanChannel KalmanSmooth(const std::vector<double>& x, double rate_hz, const K
 
 MarkerArray KalmanSmooth(const MarkerArray& markers, double rate_hz, const KalmanOptions& options) {
   MarkerArray out(markers.frames(), markers.markers());
-  const auto frames = static_cast<size_t>(markers.frames());
-  std::vector<double> x(frames);
-  for (int64_t k = 0; k < markers.markers(); ++k) {
-    std::vector<bool> valid(frames);
-    for (int64_t f = 0; f < markers.frames(); ++f)
-      valid[static_cast<size_t>(f)] = FrameValid(markers, f, k, "Kalman smoother");
-    for (int c = 0; c < 3; ++c) {
-      for (size_t f = 0; f < frames; ++f) x[f] = valid[f] ? markers.at(static_cast<int64_t>(f), k)[c] : kNaN;
-      const KalmanChannel s = KalmanSmooth(x, rate_hz, options);
-      for (size_t f = 0; f < frames; ++f)
-        if (!std::isnan(s.position[f])) out.at(static_cast<int64_t>(f), k)[c] = static_cast<float>(s.position[f]);
-    }
+  std::vector<std::vector<double>> buf;
+  for (int64_t k0 = 0; k0 < markers.markers(); k0 += kBlock) {
+    const int64_t k1 = std::min(k0 + kBlock, markers.markers());
+    GatherBlock(markers, k0, k1, "Kalman smoother", buf);
+    for (auto& x : buf) x = KalmanSmooth(x, rate_hz, options).position;
+    ScatterBlock(buf, k0, k1, out);
   }
   return out;
 }
@@ -492,19 +544,27 @@ void CentralDifferences(const Eigen::MatrixXd& p, double rate_hz, Eigen::Ref<Eig
 Kinematics MarkerKinematics(const MarkerArray& markers, double rate_hz) {
   CheckRate(rate_hz, "marker kinematics");
   Kinematics k;
-  k.speed.resize(markers.frames(), markers.markers());
-  k.acceleration.resize(markers.frames(), markers.markers());
-  Eigen::MatrixXd p(markers.frames(), 3);
-  for (int64_t m = 0; m < markers.markers(); ++m) {
-    for (int64_t f = 0; f < markers.frames(); ++f) {
-      if (FrameValid(markers, f, m, "marker kinematics")) {
-        const float* v = markers.at(f, m);
-        p.row(f) << v[0], v[1], v[2];
-      } else {
-        p.row(f).setConstant(kNaN);
+  k.speed.setConstant(markers.frames(), markers.markers(), kNaN);
+  k.acceleration.setConstant(markers.frames(), markers.markers(), kNaN);
+  std::vector<std::vector<double>> buf;
+  for (int64_t k0 = 0; k0 < markers.markers(); k0 += kBlock) {
+    const int64_t k1 = std::min(k0 + kBlock, markers.markers());
+    GatherBlock(markers, k0, k1, "marker kinematics", buf);
+    for (int64_t m = k0; m < k1; ++m) {
+      const double* x = buf[static_cast<size_t>(3 * (m - k0))].data();
+      const double* y = buf[static_cast<size_t>(3 * (m - k0) + 1)].data();
+      const double* z = buf[static_cast<size_t>(3 * (m - k0) + 2)].data();
+      double* v = k.speed.col(m).data();
+      double* a = k.acceleration.col(m).data();
+      for (int64_t i = 1; i + 1 < markers.frames(); ++i) {
+        if (std::isnan(x[i - 1]) || std::isnan(x[i]) || std::isnan(x[i + 1])) continue;
+        const double dx = x[i + 1] - x[i - 1], dy = y[i + 1] - y[i - 1], dz = z[i + 1] - z[i - 1];
+        const double ax = x[i + 1] - 2 * x[i] + x[i - 1], ay = y[i + 1] - 2 * y[i] + y[i - 1],
+                     az = z[i + 1] - 2 * z[i] + z[i - 1];
+        v[i] = std::sqrt(dx * dx + dy * dy + dz * dz) * rate_hz / 2;
+        a[i] = std::sqrt(ax * ax + ay * ay + az * az) * rate_hz * rate_hz;
       }
     }
-    CentralDifferences(p, rate_hz, k.speed.col(m), k.acceleration.col(m));
   }
   return k;
 }

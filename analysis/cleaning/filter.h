@@ -91,6 +91,10 @@ Eigen::VectorXd ButterworthFilter(const Eigen::VectorXd& x, double rate_hz, cons
 // coordinates are finite; any other frame comes out missing).
 MarkerArray ButterworthFilter(const MarkerArray& markers, double rate_hz, const ButterworthOptions& options,
                               FilterReport* report = nullptr);
+// The same in place (no new frames x markers array: the cleaning job filters the
+// take version it already owns).
+void ButterworthFilterInPlace(MarkerArray& markers, double rate_hz, const ButterworthOptions& options,
+                              FilterReport* report = nullptr);
 
 // ---------------------------------------------------------------------------
 // Kalman (Rauch-Tung-Striebel) smoother.
@@ -104,7 +108,8 @@ struct KalmanOptions {
   double measurement_sd_mm = 0.0;
   // Spectral density of the white-noise driving term: acceleration for the
   // constant-velocity model (mm^2/s^3), jerk for constant acceleration
-  // (mm^2/s^5). 0 = estimated per coordinate by maximum likelihood.
+  // (mm^2/s^5). 0 = estimated per coordinate by maximum likelihood of the
+  // innovations (channels longer than 12,000 samples: on 10 windows of 1,200).
   double process_noise = 0.0;
   // Fill the interior gaps with the smoothed prediction (default: they stay
   // missing). Leading and trailing gaps are never filled.
