@@ -186,7 +186,8 @@ double ButterworthDesignFrequency(const ButterworthOptions& options, double rate
 std::vector<Biquad> DesignButterworth(const ButterworthOptions& options, double rate_hz) {
   CheckButterworth(options, rate_hz);
   // Pre-warped analog cut-off (bilinear transform s = (1 - z^-1) / (1 + z^-1)),
-  // corrected for the double pass (Winter: w = tan(pi fc / fs) / C).
+  // divided by Winter's C: exact for the double pass, since |H|^2 depends on
+  // tan(pi f / fs) / w only.
   const double w = std::tan(M_PI * options.cutoff_hz / rate_hz) / ButterworthPassCorrection(options.order, 2);
   const int n = options.order;
   std::vector<Biquad> sections;
