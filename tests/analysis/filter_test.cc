@@ -256,6 +256,18 @@ TEST(CleaningFilter, KalmanBridgesGapsWithTheModelAndFillsOnlyWhenAsked) {
   s = KalmanSmooth(x, 100, o);
   for (size_t i = 0; i < 10; ++i) EXPECT_TRUE(std::isnan(s.position[i]));
   for (size_t i = 200; i < 230; ++i) EXPECT_NEAR(s.position[i], 3 + 0.5 * static_cast<double>(i), 1e-6) << i;
+  // Noise-free data (estimated sd ~0, floored): the smoother follows the data.
+  for (MotionModel model : {MotionModel::kConstantVelocity, MotionModel::kConstantAcceleration}) {
+    KalmanOptions z;
+    z.model = model;
+    std::vector<double> c(200, 1234.5), quad(200);
+    for (size_t i = 0; i < quad.size(); ++i) quad[i] = 800 + 0.01 * static_cast<double>(i * i);
+    for (const std::vector<double>* v : {&c, &quad}) {
+      const KalmanChannel k = KalmanSmooth(*v, 100, z);
+      EXPECT_LT(k.measurement_sd, 1e-9);  // rounding only
+      for (size_t i = 0; i < v->size(); ++i) ASSERT_NEAR(k.position[i], (*v)[i], 1e-3) << i;
+    }
+  }
   // Estimated process noise on noisy data is positive and finite.
   o = KalmanOptions();
   std::mt19937_64 rng(5);
