@@ -336,13 +336,32 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
       if (ap.ok && an.ok) u_min = std::min(u_min, LinkError(ap, an));
       if (bp.ok && bn.ok) u_min = std::min(u_min, LinkError(bp, bn));
       if (u_min < report.jump_mm) continue;
-      if (ap.ok && bn.ok) s_max = std::max(s_max, LinkError(ap, bn)), ++ns;
-      if (bp.ok && an.ok) s_max = std::max(s_max, LinkError(bp, an)), ++ns;
+      // The best-fitting swapped link decides (the other may bridge a long gap of
+      // fast motion that constant velocity cannot predict).
+      s_max = INFINITY;
+      if (ap.ok && bn.ok) s_max = std::min(s_max, LinkError(ap, bn)), ++ns;
+      if (bp.ok && an.ok) s_max = std::min(s_max, LinkError(bp, an)), ++ns;
       // The swapped links must fit (else one marker jumped alone: a spike, a step),
       // unless no link can be made across the break (both labels hidden around it).
       const double ref_error = std::isfinite(u_min) ? u_min : report.jump_mm;
-      if (ns > 0 && s_max > options.max_cost_ratio * ref_error) continue;
-      boundaries.push_back({s, ns > 0 ? 1.0 - s_max / ref_error : 0.0});
+      // A label without a past within the bridge cannot be linked: the state
+      // evidence alone decides there.
+      bool fits = ns > 0 && s_max <= options.max_cost_ratio * ref_error;
+      if (!fits && ap.frame == s - 1 && bp.frame == s - 1 && an.frame == s && bn.frame == s) {
+        // Both seen across the break: the pair's relative vector, which the hand's
+        // common motion leaves slow, flips sign at an exchange.
+        Vector3d r_pred = bp.x - ap.x;
+        if (ap.has_v && bp.has_v) r_pred += bp.v - ap.v;
+        const Vector3d r_now = bn.x - an.x;
+        const double flip = (r_now + r_pred).norm(), keep = (r_now - r_pred).norm();
+        fits = keep >= report.jump_mm && flip <= options.max_cost_ratio * keep;
+      }
+      // Confirmed exchange (1) or a break the state evidence alone must decide (0):
+      // a label without a past within the bridge cannot be linked.
+      if (fits)
+        boundaries.push_back({s, 1.0});
+      else if (ns == 0 || !ap.ok || !bp.ok)
+        boundaries.push_back({s, 0.0});
     }
     if (boundaries.empty()) continue;
     // State evidence per segment between boundaries: the labels' distances to
@@ -374,7 +393,8 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
     int64_t run_start = -1;
     double run_evidence = 0.0;
     int64_t run_frames = 0;
-    auto close_run = [&](int64_t end) {
+    bool run_confirmed = false;
+    auto close_run = [&](int64_t end, bool end_confirmed) {
       if (run_start < 0) return;
       DetectedSwap d;
       d.marker_a = a;
@@ -382,9 +402,12 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
       d.first_frame = run_start;
       d.end_frame = end;
       d.open_ended = end == frames;
-      d.confidence = 1.0 - std::exp(-run_evidence / std::max<double>(1.0, static_cast<double>(run_frames)));
+      d.evidence = run_evidence / std::max<double>(1.0, static_cast<double>(run_frames));
+      d.confidence = 1.0 - std::exp(-d.evidence);
       if (d.open_ended) d.confidence *= 0.5;
-      if (d.confidence >= options.min_confidence) report.swaps.push_back(d);
+      // Neither exchange seen in the trajectories: stronger evidence needed.
+      const bool enough = run_confirmed || end_confirmed || d.evidence >= options.min_unconfirmed_evidence;
+      if (enough && d.confidence >= options.min_confidence) report.swaps.push_back(d);
       run_start = -1;
     };
     for (size_t i = 0; i + 1 < edges.size(); ++i) {
@@ -399,8 +422,9 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
           run_start = edges[i];
           run_evidence = 0.0;
           run_frames = 0;
+          run_confirmed = i > 0 && boundaries[i - 1].confidence > 0.0;
         }
-        if (!swapped && state) close_run(edges[i]);
+        if (!swapped && state) close_run(edges[i], i > 0 && boundaries[i - 1].confidence > 0.0);
         state = swapped;
       }
       if (state) {
@@ -408,8 +432,23 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
         run_frames += informative;
       }
     }
-    if (state) close_run(frames);
+    if (state) close_run(frames, false);
   }
+  // Conflicts: a label swapped with two partners at once (the partner of a true
+  // swap also looks exchanged with a third marker); the stronger evidence wins.
+  std::stable_sort(report.swaps.begin(), report.swaps.end(),
+                   [](const DetectedSwap& x, const DetectedSwap& y) { return x.evidence > y.evidence; });
+  std::vector<DetectedSwap> kept;
+  for (const DetectedSwap& d : report.swaps) {
+    bool clash = false;
+    for (const DetectedSwap& k : kept) {
+      const bool share =
+          d.marker_a == k.marker_a || d.marker_a == k.marker_b || d.marker_b == k.marker_a || d.marker_b == k.marker_b;
+      if (share && d.first_frame < k.end_frame && k.first_frame < d.end_frame) clash = true;
+    }
+    if (!clash) kept.push_back(d);
+  }
+  report.swaps = std::move(kept);
   std::sort(report.swaps.begin(), report.swaps.end(), [](const DetectedSwap& x, const DetectedSwap& y) {
     if (x.first_frame != y.first_frame) return x.first_frame < y.first_frame;
     return std::make_pair(x.marker_a, x.marker_b) < std::make_pair(y.marker_a, y.marker_b);

@@ -6,20 +6,33 @@
 // or every pair inside caller-given groups such as a segment or a cluster);
 // nothing depends on marker names.
 //
-// Method (a two-track version of multiple-hypothesis data association, Reid
-// 1979, on constant-velocity motion): each label's trajectory breaks where it
-// jumps (constant-velocity prediction residual above jump_mm) or reappears after
-// a gap. At every break frame of a candidate pair the segments before and after
-// the break are linked two ways — unswapped (a→a, b→b) and swapped (a→b, b→a) —
-// each link scored by its constant-velocity extrapolation error from both sides
-// (across the gap when a label is missing). A break where every unswapped link
-// fails (≥ jump_mm) and the swapped links fit (≤ max_cost_ratio × the unswapped
-// error) exchanges the labels; successive exchanges of a pair bound the swapped
-// intervals. The take is assumed correctly labelled at its start.
+// Method, per candidate pair (a, b):
+//  1. Breaks. Each label's trajectory breaks where it jumps (constant-velocity
+//     prediction residual above jump_mm) or reappears after missing samples.
+//  2. Exchanges (a two-track form of multiple-hypothesis data association,
+//     Reid 1979). At each break the label segments before and after are linked
+//     unswapped (a→a, b→b) and swapped (a→b, b→a), each link scored by its
+//     constant-velocity extrapolation error (mm) from both sides, across gaps
+//     within max_bridge_s. A break where a label continues its own trajectory
+//     (an unswapped link below jump_mm) cannot be an exchange. It is a
+//     confirmed exchange when the best swapped link fits (≤ max_cost_ratio × the
+//     unswapped error) or, both labels seen on both sides, when the pair's
+//     relative vector flips sign (robust to fast common hand motion); it is an
+//     open boundary when a label has no past within the bridge.
+//  3. State. Between boundaries the labels' distances to reference markers
+//     (markers whose distance to a or b is steady over the take: 1.4826 × MAD ≤
+//     max_reference_sd_mm) give a log-likelihood ratio, swapped over not; a
+//     segment is swapped when the ratio exceeds min_evidence and the exchanged
+//     labels fit the references (mean z² ≤ max_swapped_misfit). An interval
+//     bounded by open boundaries only needs min_unconfirmed_evidence per frame.
+//     Pairs without a reference marker use the confirmed exchanges alone,
+//     paired in order (the take assumed correctly labelled at its start).
+//  4. A label found swapped with two partners at overlapping times keeps the
+//     stronger evidence.
 // Gaps: a swap that starts or ends while one label is missing is found at the
 // other label's jump (exact frame); when both labels are missing it is found at
-// the first frame where one reappears (the exchange of the frames before, all
-// missing in both, changes nothing). See docs/cleaning-swaps.md.
+// the first frame where one reappears (exchanging the frames before, missing
+// in both, changes nothing). See docs/cleaning-swaps.md.
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -39,12 +52,13 @@ struct SwapOptions {
   double jump_mm = 0.0;
   double jump_floor_mm = 4.0;
   double jump_noise_factor = 10.0;
-  double max_bridge_s = 0.25;        // a label's segment before/after a break is looked for this far
-  double max_cost_ratio = 0.35;      // swapped links' error ≤ this × the unswapped links' error
-  double max_reference_sd_mm = 2.5;  // reference markers: distance to a label this steady (1.4826 × MAD)
-  double max_swapped_misfit = 16.0;  // swapped segments: mean z² of the distances to the references
-  double min_evidence = 20.0;        // |log-likelihood ratio| of a segment's state evidence needed to decide it
-  double min_confidence = 0.3;       // swaps below are not reported
+  double max_bridge_s = 0.25;              // a label's segment before/after a break is looked for this far
+  double max_cost_ratio = 0.35;            // swapped links' error ≤ this × the unswapped links' error
+  double max_reference_sd_mm = 2.5;        // reference markers: distance to a label this steady (1.4826 × MAD)
+  double max_swapped_misfit = 24.0;        // swapped segments: mean z² of the distances to the references
+  double min_evidence = 20.0;              // |log-likelihood ratio| of a segment's state evidence needed to decide it
+  double min_unconfirmed_evidence = 12.0;  // ... for an interval neither of whose exchanges is seen
+  double min_confidence = 0.3;             // swaps below are not reported
 };
 
 struct DetectedSwap {
@@ -54,6 +68,9 @@ struct DetectedSwap {
   // In [0, 1]: min over the start and end exchanges of (1 − swapped/unswapped link error) × (links seen / 4),
   // halved when open-ended.
   double confidence = 0.0;
+  // Mean log-likelihood ratio (swapped over not) per informative frame of the
+  // interval; 0 when no reference marker was found (continuity alone).
+  double evidence = 0.0;
 };
 
 struct SwapReport {
