@@ -123,6 +123,8 @@ double LinkError(const End& pre, const End& post) {
   return n == 0 ? (post.x - pre.x).norm() : sum / n;
 }
 
+// A boundary of a pair's state: confidence 1 for an exchange seen in the
+// trajectories, 0 for a break only the state evidence can decide.
 struct Exchange {
   int64_t frame = 0;
   double confidence = 0.0;

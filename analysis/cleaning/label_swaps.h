@@ -45,7 +45,7 @@ struct SwapOptions {
   // Candidate pairs (columns). Explicit pairs win; else every pair inside each group; else automatic.
   std::vector<std::pair<int, int>> pairs;
   std::vector<std::vector<int>> groups;
-  int neighbours = 8;                   // automatic: each marker's nearest markers by median distance ...
+  int neighbours = 12;                  // automatic: each marker's nearest markers by median distance ...
   double max_pair_distance_mm = 150.0;  // ... no farther than this on median
   // Break threshold (mm): > 0 fixed; 0 = max(jump_floor_mm, jump_noise_factor × robust σ of the take's
   // per-coordinate constant-velocity residuals).
@@ -65,8 +65,8 @@ struct DetectedSwap {
   int marker_a = 0, marker_b = 0;          // a < b
   int64_t first_frame = 0, end_frame = 0;  // swapped over [first, end); end = frames when open-ended
   bool open_ended = false;                 // no exchange back before the end of the take
-  // In [0, 1]: min over the start and end exchanges of (1 − swapped/unswapped link error) × (links seen / 4),
-  // halved when open-ended.
+  // In [0, 1]: 1 − exp(−evidence) with reference markers; 1 when found from the
+  // trajectories' exchanges alone (no reference marker); halved when open-ended.
   double confidence = 0.0;
   // Mean log-likelihood ratio (swapped over not) per informative frame of the
   // interval; 0 when no reference marker was found (continuity alone).

@@ -221,7 +221,7 @@ TEST(LabelSwaps, VirtualCuerSwapsOverThirtyTakesAreFoundAndFixed) {
             << t.max_fix_error_mm << " mm\n";
   ASSERT_EQ(t.injected, 30);
   EXPECT_GE(t.found, 29);        // ≥ 95 % (measured: 29; the miss is listed in docs/cleaning-swaps.md)
-  EXPECT_LE(t.false_alarms, 3);  // at most one per 10 takes
+  EXPECT_LE(t.false_alarms, 3);  // at most one per 10 takes (measured: 0)
   EXPECT_LE(t.max_start_error, kFrameTolerance);
   EXPECT_LE(t.max_end_error, kFrameTolerance);
   EXPECT_LE(t.max_fix_error_mm, 2.0);  // every sample of a found swap back on its marker (noise 0.2 mm)
