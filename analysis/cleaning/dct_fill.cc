@@ -22,6 +22,8 @@ std::string DctFillOptions::Check() const {
   if (!(smoothing >= 0.0) || !std::isfinite(smoothing)) return "dct fill: smoothing must be a finite s ≥ 0 (0 = GCV)";
   if (max_iterations < 1) return "dct fill: max_iterations must be ≥ 1";
   if (!(tolerance_mm > 0.0)) return "dct fill: tolerance_mm must be > 0";
+  if (max_window_frames < 2 * static_cast<int64_t>(context_frames) + 1 || max_window_frames > 4096)
+    return "dct fill: max_window_frames must be in 2 × context_frames + 1 .. 4096";
   return "";
 }
 
@@ -79,6 +81,9 @@ DctSmoothResult DctSmooth(const Eigen::MatrixXd& y, const Eigen::VectorXd& w, do
     throw InvalidInput("DCT smooth: smoothing must be a finite s ≥ 0 (0 = GCV)");
   if (max_iterations < 1 || !(tolerance > 0.0))
     throw InvalidInput("DCT smooth: max_iterations must be ≥ 1 and the tolerance > 0");
+  if (y.rows() > 4096)
+    throw InvalidInput("DCT smooth: window of " + std::to_string(y.rows()) +
+                       " frames, at most 4096 for the matrix DCT");
   const int n = static_cast<int>(y.rows());
   double wmax = 0.0;
   int64_t valid = 0;
@@ -230,6 +235,9 @@ bool DctFiller::CanFill(const MarkerArray& in, const Gap& gap, std::string* why_
   if (options_.max_gap_frames > 0 && gap.length > options_.max_gap_frames)
     why = "gap of " + std::to_string(gap.length) + " frames longer than the DCT fill's maximum of " +
           std::to_string(options_.max_gap_frames) + " frames";
+  else if (gap.length + 2 * static_cast<int64_t>(options_.context_frames) > options_.max_window_frames)
+    why = "gap of " + std::to_string(gap.length) + " frames too long for the DCT window of at most " +
+          std::to_string(options_.max_window_frames) + " frames";
   else
     why = CheckSides(in, gap, options_.side_frames);
   if (why_not != nullptr) *why_not = why;

@@ -43,7 +43,10 @@ struct DctFillOptions {
   // Frames taken on each side of the gap for the fit (valid or not).
   int context_frames = 30;
   int64_t max_gap_frames = 0;  // 0 = no limit of the method's own
-  double smoothing = 0.0;      // fixed s > 0, or 0 to choose s by GCV
+  // Longest window (gap + context) the matrix DCT accepts: N × N doubles
+  // (1,000 frames: 8 MB); longer gaps are refused with a reason.
+  int64_t max_window_frames = 1000;
+  double smoothing = 0.0;  // fixed s > 0, or 0 to choose s by GCV
   // Garcia's iteration (smoothn's defaults: at most 100 iterations); it
   // chooses s, and the fill is then the iteration's limit at that s.
   int max_iterations = 100;
@@ -66,7 +69,8 @@ struct DctSmoothResult {
 
 // Garcia's DCT-PLS smoothing of y (N × columns, values at weight-0 frames
 // ignored) with weights w (N, ≥ 0; 0 = missing). smoothing > 0: fixed s;
-// 0: s by GCV per column. Throws InvalidInput when no frame has weight > 0,
+// 0: s by GCV per column. Throws InvalidInput when N > 4096 (the matrix DCT),
+// when no frame has weight > 0,
 // when the sizes disagree or an option is out of range.
 // With missing frames, the returned z is the limit of the iteration at the
 // final s (solved directly: (W + s DᵀD) z = W y), so it does not depend on

@@ -368,10 +368,22 @@ double Forward(const Model<D>& m, const std::vector<double>& y, int64_t first, i
   }
   double nll = 0;
   int updates = 0;
+  // The covariances depend only on which samples are missing: along a run they
+  // converge to the steady state (Riccati equation). Once the filtered
+  // covariance repeats to 1e-10 (relative), the steady gain is reused until the
+  // next missing sample.
+  bool steady = false, prev_updated = false;
+  Mat P_pred_ss = Mat::Zero(), P_filt_ss = Mat::Zero(), P_prev = Mat::Zero();
+  Vec k_ss = Vec::Zero();
+  double s_ss = 0;
   for (int64_t i = 0; i < n; ++i) {
     if (i > 0) {
       x = m.F * x;
-      P = m.F * P * m.F.transpose() + m.Q;
+      if (steady) {
+        P = P_pred_ss;
+      } else {
+        P = m.F * P * m.F.transpose() + m.Q;
+      }
     }
     if (store) {
       (*xp)[static_cast<size_t>(i)] = x;
@@ -379,13 +391,32 @@ double Forward(const Model<D>& m, const std::vector<double>& y, int64_t first, i
     }
     const double yi = y[static_cast<size_t>(first + i)];
     if (!std::isnan(yi) && i > 0) {
-      const double s = P(0, 0) + r;
       const double e = yi - x(0);
-      const Vec k = P.col(0) / s;
-      x += k * e;
-      P -= k * P.row(0);
-      P = 0.5 * (P + P.transpose()).eval();
+      double s;
+      if (steady) {
+        s = s_ss;
+        x += k_ss * e;
+        P = P_filt_ss;
+      } else {
+        s = P(0, 0) + r;
+        const Vec k = P.col(0) / s;
+        const Mat P_pred = P;
+        x += k * e;
+        P -= k * P.row(0);
+        P = 0.5 * (P + P.transpose()).eval();
+        if (prev_updated && (P - P_prev).cwiseAbs().maxCoeff() <= 1e-10 * P.cwiseAbs().maxCoeff()) {
+          steady = true;
+          P_pred_ss = P_pred;
+          P_filt_ss = P;
+          k_ss = k;
+          s_ss = s;
+        }
+        P_prev = P;
+      }
+      prev_updated = true;
       if (++updates > D) nll += 0.5 * (std::log(s) + e * e / s);
+    } else {
+      steady = prev_updated = false;
     }
     if (store) {
       (*xf)[static_cast<size_t>(i)] = x;
@@ -403,7 +434,13 @@ double ProcessNoiseForBandwidth(int d, double r, double dt, double f_hz) {
 }
 
 template <int D>
-KalmanChannel SmoothChannel(const std::vector<double>& y, double rate_hz, const KalmanOptions& o) {
+struct Workspace {  // storage of the forward pass, reused across channels
+  std::vector<typename Model<D>::Vec> xp, xf;
+  std::vector<typename Model<D>::Mat> Pp, Pf;
+};
+
+template <int D>
+KalmanChannel SmoothChannel(const std::vector<double>& y, double rate_hz, const KalmanOptions& o, Workspace<D>& ws) {
   using Vec = typename Model<D>::Vec;
   using Mat = typename Model<D>::Mat;
   KalmanChannel out;
@@ -469,8 +506,10 @@ KalmanChannel SmoothChannel(const std::vector<double>& y, double rate_hz, const 
   }
   out.process_noise = q;
   const Model<D> m(dt, q);
-  std::vector<Vec> xp, xf;
-  std::vector<Mat> Pp, Pf;
+  std::vector<Vec>& xp = ws.xp;
+  std::vector<Vec>& xf = ws.xf;
+  std::vector<Mat>& Pp = ws.Pp;
+  std::vector<Mat>& Pf = ws.Pf;
   Forward<D>(m, y, first, last, r, true, &xp, &Pp, &xf, &Pf);
   // Rauch, Tung & Striebel (1965): x_s[i] = x_f[i] + G (x_s[i+1] - x_p[i+1]),
   // G = P_f[i] F' P_p[i+1]^-1, computed as (P_p[i+1] \ (F P_f[i]))'.
@@ -484,9 +523,17 @@ KalmanChannel SmoothChannel(const std::vector<double>& y, double rate_hz, const 
     }
   };
   emit(n - 1, xs);
+  Mat G = Mat::Zero(), G_pf = Mat::Zero(),
+      G_pp = Mat::Zero();  // the last gain and the covariances it was computed from
+  bool have_g = false;
   for (int64_t i = n - 2; i >= 0; --i) {
     const auto k = static_cast<size_t>(i);
-    const Mat G = Pp[k + 1].llt().solve(m.F * Pf[k]).transpose();
+    if (!have_g || Pf[k] != G_pf || Pp[k + 1] != G_pp) {  // steady state: same covariances, same gain
+      G = Pp[k + 1].llt().solve(m.F * Pf[k]).transpose();
+      G_pf = Pf[k];
+      G_pp = Pp[k + 1];
+      have_g = true;
+    }
     xs = xf[k] + G * (xs - xp[k + 1]);
     emit(i, xs);
   }
@@ -495,7 +542,9 @@ KalmanChannel SmoothChannel(const std::vector<double>& y, double rate_hz, const 
 
 }  // namespace
 
-KalmanChannel KalmanSmooth(const std::vector<double>& x, double rate_hz, const KalmanOptions& options) {
+namespace {
+
+void CheckKalman(double rate_hz, const KalmanOptions& options) {
   CheckRate(rate_hz, "Kalman smoother");
   if (!(options.measurement_sd_mm >= 0) || !std::isfinite(options.measurement_sd_mm))
     throw InvalidInput("Kalman smoother: measurement sd must be >= 0 mm (0 = estimate), got " +
@@ -503,18 +552,34 @@ KalmanChannel KalmanSmooth(const std::vector<double>& x, double rate_hz, const K
   if (!(options.process_noise >= 0) || !std::isfinite(options.process_noise))
     throw InvalidInput("Kalman smoother: process noise must be >= 0 (0 = estimate), got " +
                        std::to_string(options.process_noise));
+}
+
+KalmanChannel Smooth(const std::vector<double>& x, double rate_hz, const KalmanOptions& options, Workspace<2>& w2,
+                     Workspace<3>& w3) {
+  return options.model == MotionModel::kConstantVelocity ? SmoothChannel<2>(x, rate_hz, options, w2)
+                                                         : SmoothChannel<3>(x, rate_hz, options, w3);
+}
+
+}  // namespace
+
+KalmanChannel KalmanSmooth(const std::vector<double>& x, double rate_hz, const KalmanOptions& options) {
+  CheckKalman(rate_hz, options);
   CheckFinite(x, "Kalman smoother");
-  return options.model == MotionModel::kConstantVelocity ? SmoothChannel<2>(x, rate_hz, options)
-                                                         : SmoothChannel<3>(x, rate_hz, options);
+  Workspace<2> w2;
+  Workspace<3> w3;
+  return Smooth(x, rate_hz, options, w2, w3);
 }
 
 MarkerArray KalmanSmooth(const MarkerArray& markers, double rate_hz, const KalmanOptions& options) {
+  CheckKalman(rate_hz, options);
   MarkerArray out(markers.frames(), markers.markers());
   std::vector<std::vector<double>> buf;
+  Workspace<2> w2;
+  Workspace<3> w3;
   for (int64_t k0 = 0; k0 < markers.markers(); k0 += kBlock) {
     const int64_t k1 = std::min(k0 + kBlock, markers.markers());
-    GatherBlock(markers, k0, k1, "Kalman smoother", buf);
-    for (auto& x : buf) x = KalmanSmooth(x, rate_hz, options).position;
+    GatherBlock(markers, k0, k1, "Kalman smoother", buf);  // infinities throw here
+    for (auto& x : buf) x = Smooth(x, rate_hz, options, w2, w3).position;
     ScatterBlock(buf, k0, k1, out);
   }
   return out;

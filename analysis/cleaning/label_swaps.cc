@@ -419,7 +419,10 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
       if (std::abs(l) >= options.min_evidence) {
         // Swapped only when the exchanged labels fit the references (mean z² below
         // max_swapped_misfit), not merely better than the labels as they are.
-        const bool swapped = l > 0.0 && misfit <= options.max_swapped_misfit * static_cast<double>(terms);
+        const bool both_confirmed = i > 0 && boundaries[i - 1].confidence > 0.0 && i + 1 < boundaries.size() + 1 &&
+                                    i < boundaries.size() && boundaries[i].confidence > 0.0;
+        const bool swapped =
+            l > 0.0 && (both_confirmed || misfit <= options.max_swapped_misfit * static_cast<double>(terms));
         if (swapped && !state) {
           run_start = edges[i];
           run_evidence = 0.0;
@@ -436,6 +439,11 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
     }
     if (state) close_run(frames, false);
   }
+  // Exchanges back within a few frames are jitter, not a swap of labels.
+  report.swaps.erase(
+      std::remove_if(report.swaps.begin(), report.swaps.end(),
+                     [&](const DetectedSwap& d) { return d.end_frame - d.first_frame < options.min_frames; }),
+      report.swaps.end());
   // Conflicts: a label swapped with two partners at once (the partner of a true
   // swap also looks exchanged with a third marker); the stronger evidence wins.
   std::stable_sort(report.swaps.begin(), report.swaps.end(),

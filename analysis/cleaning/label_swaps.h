@@ -27,8 +27,9 @@
 //     bounded by open boundaries only needs min_unconfirmed_evidence per frame.
 //     Pairs without a reference marker use the confirmed exchanges alone,
 //     paired in order (the take assumed correctly labelled at its start).
-//  4. A label found swapped with two partners at overlapping times keeps the
-//     stronger evidence.
+//     A segment between two confirmed exchanges needs no reference fit.
+//  4. Intervals shorter than min_frames are dropped (jitter), and a label found
+//     swapped with two partners at overlapping times keeps the stronger evidence.
 // Gaps: a swap that starts or ends while one label is missing is found at the
 // other label's jump (exact frame); when both labels are missing it is found at
 // the first frame where one reappears (exchanging the frames before, missing
@@ -58,6 +59,7 @@ struct SwapOptions {
   double max_swapped_misfit = 24.0;        // swapped segments: mean z² of the distances to the references
   double min_evidence = 20.0;              // |log-likelihood ratio| of a segment's state evidence needed to decide it
   double min_unconfirmed_evidence = 12.0;  // ... for an interval neither of whose exchanges is seen
+  int64_t min_frames = 4;                  // shorter intervals are not reported (jitter)
   double min_confidence = 0.3;             // swaps below are not reported
 };
 

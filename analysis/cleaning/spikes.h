@@ -22,7 +22,7 @@ struct SpikeOptions {
   std::vector<int> columns;         // markers to check (empty = all)
   double threshold_mm_s2 = 0.0;     // > 0: fixed threshold; 0: automatic (below)
   double mad_factor = 8.0;          // automatic: k × 1.4826 × MAD of the acceleration components
-  double floor_mm_s2 = 30000.0;     // automatic: never below this (30 m/s²: above cueing-hand accelerations)
+  double floor_mm_s2 = 30000.0;     // automatic: never below this (30 m/s²; smooth hand motion stays under it)
   double localisation_ratio = 1.5;  // |a_f| ≥ ratio × max(|a_f-1|, |a_f+1|) (2 for a pure spike, 1 for a step)
 };
 

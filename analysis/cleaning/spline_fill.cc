@@ -52,9 +52,10 @@ namespace {
 // (Golub & Van Loan, Matrix Computations, 4th ed., §4.3.6: band LDLᵀ) and the
 // band of its inverse (Takahashi recursion). Eigen has no banded solver, and
 // the selected inverse needs the band of L directly.
+template <int M>
 class BandLdlt {
  public:
-  BandLdlt(int n, int m) : n_(n), m_(m), l_(static_cast<size_t>(n) * (m + 1), 0.0), d_(static_cast<size_t>(n), 0.0) {}
+  explicit BandLdlt(int n) : n_(n), l_(static_cast<size_t>(n) * (M + 1), 0.0), d_(static_cast<size_t>(n), 0.0) {}
 
   // a(i, k) = A(i, i − k), k = 0..m, row-major n × (m + 1). Returns false when
   // A is not numerically positive definite.
@@ -109,7 +110,8 @@ class BandLdlt {
  private:
   size_t Idx(int i, int k) const { return static_cast<size_t>(i) * (m_ + 1) + k; }
   double L(int i, int j) const { return l_[Idx(i, i - j)]; }  // j < i, i − j ≤ m
-  int n_, m_;
+  static constexpr int m_ = M;  // half-bandwidth, known at compile time so the band loops unroll
+  int n_;
   std::vector<double> l_, d_, z_;
 };
 
@@ -128,10 +130,11 @@ std::vector<double> DifferencePenalty(int n, int m) {
   return p;
 }
 
+template <int M>
 class PenalisedProblem {
  public:
-  PenalisedProblem(const Eigen::MatrixXd& y, const Eigen::VectorXd& w, int m)
-      : n_(static_cast<int>(y.rows())), m_(m), w_(w), penalty_(DifferencePenalty(n_, m)), ldlt_(n_, m) {
+  PenalisedProblem(const Eigen::MatrixXd& y, const Eigen::VectorXd& w)
+      : n_(static_cast<int>(y.rows())), w_(w), penalty_(DifferencePenalty(n_, M)), ldlt_(n_) {
     for (int i = 0; i < n_; ++i) valid_ += w_[i] > 0 ? 1 : 0;
     // Centre each column on its weighted mean (the penalty ignores constants,
     // so this is exact) to keep the solve well conditioned at large p.
@@ -184,10 +187,11 @@ class PenalisedProblem {
   double mean(Eigen::Index c) const { return mean_[c]; }
 
  private:
-  int n_, m_;
+  static constexpr int m_ = M;
+  int n_;
   Eigen::VectorXd w_;
   std::vector<double> penalty_;
-  BandLdlt ldlt_;
+  BandLdlt<M> ldlt_;
   int64_t valid_ = 0;
   Eigen::VectorXd mean_;
   Eigen::MatrixXd wy_, yc_;
@@ -196,19 +200,13 @@ class PenalisedProblem {
 
 }  // namespace
 
-PenalisedFit PenalisedSmooth(const Eigen::MatrixXd& y, const Eigen::VectorXd& w, int order, double smoothing,
-                             bool joint) {
-  if (y.rows() != w.size())
-    throw InvalidInput("penalised smooth: " + std::to_string(y.rows()) + " rows but " + std::to_string(w.size()) +
-                       " weights");
-  if (order < 1) throw InvalidInput("penalised smooth: order " + std::to_string(order) + " must be ≥ 1");
-  if (!(smoothing >= 0.0) || !std::isfinite(smoothing))
-    throw InvalidInput("penalised smooth: smoothing must be a finite p ≥ 0 (0 = GCV)");
-  for (Eigen::Index i = 0; i < w.size(); ++i)
-    if (!(w[i] >= 0.0) || !std::isfinite(w[i]))
-      throw InvalidInput("penalised smooth: weight " + std::to_string(i) + " is not a finite number ≥ 0");
+namespace {
+
+template <int M>
+PenalisedFit SmoothImpl(const Eigen::MatrixXd& y, const Eigen::VectorXd& w, double smoothing, bool joint) {
   const int n = static_cast<int>(y.rows());
-  PenalisedProblem problem(y, w, order);
+  const int order = M;
+  PenalisedProblem<M> problem(y, w);
   if (problem.valid() < order + 1)
     throw InvalidInput("penalised smooth: " + std::to_string(problem.valid()) + " weighted frames, at least " +
                        std::to_string(order + 1) + " needed for order " + std::to_string(order));
@@ -284,6 +282,37 @@ PenalisedFit PenalisedSmooth(const Eigen::MatrixXd& y, const Eigen::VectorXd& w,
       store(c, std::pow(10.0, best_e));
   }
   return fit;
+}
+
+}  // namespace
+
+PenalisedFit PenalisedSmooth(const Eigen::MatrixXd& y, const Eigen::VectorXd& w, int order, double smoothing,
+                             bool joint) {
+  if (y.rows() != w.size())
+    throw InvalidInput("penalised smooth: " + std::to_string(y.rows()) + " rows but " + std::to_string(w.size()) +
+                       " weights");
+  if (order < 1) throw InvalidInput("penalised smooth: order " + std::to_string(order) + " must be ≥ 1");
+  if (!(smoothing >= 0.0) || !std::isfinite(smoothing))
+    throw InvalidInput("penalised smooth: smoothing must be a finite p ≥ 0 (0 = GCV)");
+  for (Eigen::Index i = 0; i < w.size(); ++i)
+    if (!(w[i] >= 0.0) || !std::isfinite(w[i]))
+      throw InvalidInput("penalised smooth: weight " + std::to_string(i) + " is not a finite number ≥ 0");
+  switch (order) {
+    case 1:
+      return SmoothImpl<1>(y, w, smoothing, joint);
+    case 2:
+      return SmoothImpl<2>(y, w, smoothing, joint);
+    case 3:
+      return SmoothImpl<3>(y, w, smoothing, joint);
+    case 4:
+      return SmoothImpl<4>(y, w, smoothing, joint);
+    case 5:
+      return SmoothImpl<5>(y, w, smoothing, joint);
+    case 6:
+      return SmoothImpl<6>(y, w, smoothing, joint);
+    default:
+      throw InvalidInput("penalised smooth: order " + std::to_string(order) + " must be in 1..6");
+  }
 }
 
 // ---------------------------------------------------------------------------

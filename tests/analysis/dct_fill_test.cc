@@ -111,6 +111,13 @@ TEST(CleaningDctFill, FillsASinusoidGapAndRemovesNoise) {
   DctFillOptions bad;
   bad.context_frames = 2;
   EXPECT_THROW(DctFiller{bad}, InvalidInput);
+  // A gap too long for the matrix DCT is refused with the reason.
+  DctFillOptions small;
+  small.max_window_frames = 65;
+  MarkerArray longer = clean;
+  for (int64_t f = 90; f < 120; ++f) longer.SetMissing(f, 0);
+  EXPECT_FALSE(DctFiller(small).CanFill(longer, FindGaps(longer, 0).at(0), &why));
+  EXPECT_EQ(why, "gap of 30 frames too long for the DCT window of at most 65 frames");
 }
 
 }  // namespace

@@ -110,6 +110,18 @@ TEST(LabelSwaps, OpenEndedSwapAndExplicitPairs) {
   EXPECT_EQ(MaxError(m, clean), 0.0);
 }
 
+TEST(LabelSwaps, ExchangeBackWithinFewFramesIsNotReported) {
+  MarkerArray m = HandMade(400);
+  Exchange(&m, 1, 2, 120, 123);  // 3 frames < min_frames (4)
+  EXPECT_TRUE(DetectLabelSwaps(m, 120.0).swaps.empty());
+  SwapOptions o;
+  o.min_frames = 3;
+  SwapReport r = DetectLabelSwaps(m, 120.0, o);
+  ASSERT_EQ(r.swaps.size(), 1u);
+  EXPECT_EQ(r.swaps[0].first_frame, 120);
+  EXPECT_EQ(r.swaps[0].end_frame, 123);
+}
+
 TEST(LabelSwaps, RejectsBadInput) {
   MarkerArray m = HandMade(50);
   EXPECT_THROW(DetectLabelSwaps(m, 0.0), InvalidInput);
