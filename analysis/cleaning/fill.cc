@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "core/error.h"
 
@@ -76,8 +77,76 @@ bool GapWritten(const MarkerArray& out, const Gap& gap) {
 
 }  // namespace
 
+std::string CheckFillSpeed(const MarkerArray& in, const MarkerArray& out, const Gap& gap,
+                           const FillGuardOptions& guard) {
+  if (!(guard.speed_factor > 0)) return "";
+  auto step = [](const float* a, const float* b) {
+    return std::sqrt(std::pow(double(a[0]) - b[0], 2) + std::pow(double(a[1]) - b[1], 2) +
+                     std::pow(double(a[2]) - b[2], 2));
+  };
+  const int64_t m = gap.marker;
+  // Peak measured speed in the context (consecutive measured frames only).
+  double context = 0;
+  const int64_t lo = std::max<int64_t>(1, gap.start - guard.context_frames);
+  const int64_t hi = std::min<int64_t>(in.frames() - 1, gap.end() + guard.context_frames);
+  double box_lo[3] = {INFINITY, INFINITY, INFINITY}, box_hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int64_t f = lo - 1; f <= hi; ++f) {
+    if (f >= gap.start && f < gap.end()) continue;
+    if (SampleMissing(in, f, m)) continue;
+    for (int c = 0; c < 3; ++c) {
+      box_lo[c] = std::min(box_lo[c], double(in.at(f, m)[c]));
+      box_hi[c] = std::max(box_hi[c], double(in.at(f, m)[c]));
+    }
+    if (f < lo || f == gap.end() || SampleMissing(in, f - 1, m)) continue;
+    context = std::max(context, step(in.at(f, m), in.at(f - 1, m)));
+  }
+  double needed = 0;
+  const bool before = gap.start > 0 && !SampleMissing(in, gap.start - 1, m);
+  const bool after = gap.end() < in.frames() && !SampleMissing(in, gap.end(), m);
+  if (before && after)
+    needed = step(in.at(gap.start - 1, m), in.at(gap.end(), m)) / static_cast<double>(gap.length + 1);
+  if (context == 0 && needed == 0) return "";  // nothing measured to compare with
+  const double limit = guard.speed_factor * std::max({context, needed, guard.floor_mm_per_frame});
+  double peak = 0;
+  // Steps from the measured edge sample into the gap, inside it, and out of it.
+  const int64_t first_step = before ? gap.start : gap.start + 1;
+  for (int64_t f = std::max<int64_t>(1, first_step); f <= gap.end() && f < out.frames(); ++f) {
+    if (SampleMissing(out, f, m) || SampleMissing(out, f - 1, m)) continue;
+    peak = std::max(peak, step(out.at(f, m), out.at(f - 1, m)));
+  }
+  char buf[256];
+  if (std::isfinite(box_lo[0])) {
+    const double diagonal = std::sqrt(std::pow(box_hi[0] - box_lo[0], 2) + std::pow(box_hi[1] - box_lo[1], 2) +
+                                      std::pow(box_hi[2] - box_lo[2], 2));
+    const double margin = std::max(guard.box_margin * diagonal, guard.box_floor_mm);
+    double outside = 0;
+    for (int64_t f = gap.start; f < gap.end(); ++f) {
+      double d2 = 0;
+      for (int c = 0; c < 3; ++c) {
+        const double v = out.at(f, m)[c];
+        const double d = v < box_lo[c] ? box_lo[c] - v : (v > box_hi[c] ? v - box_hi[c] : 0.0);
+        d2 += d * d;
+      }
+      outside = std::max(outside, std::sqrt(d2));
+    }
+    if (outside > margin) {
+      std::snprintf(buf, sizeof(buf),
+                    "fill refused: it leaves the box of the measured samples around the gap by %.1f mm, more "
+                    "than %.1f mm",
+                    outside, margin);
+      return buf;
+    }
+  }
+  if (peak <= limit) return "";
+  std::snprintf(buf, sizeof(buf),
+                "fill refused: peak speed %.1f mm/frame in the gap, more than %.1f x the largest of the measured "
+                "peak around it (%.1f), the speed needed to cross it (%.1f) and %.1f mm/frame",
+                peak, guard.speed_factor, context, needed, guard.floor_mm_per_frame);
+  return buf;
+}
+
 FillReport FillGaps(const MarkerArray& in, const std::vector<const GapFiller*>& methods, int64_t max_gap_frames,
-                    MarkerArray* out, Progress* progress) {
+                    MarkerArray* out, Progress* progress, const FillGuardOptions& guard) {
   if (out == nullptr) throw InvalidInput("fill gaps: no output array");
   if (out == &in) throw InvalidInput("fill gaps: the output must not be the input (fills read only the input)");
   CheckArguments(in, methods, max_gap_frames);
@@ -108,7 +177,9 @@ FillReport FillGaps(const MarkerArray& in, const std::vector<const GapFiller*>& 
         rec.start = gap.start;
         rec.length = gap.length;
         rec.method = name;
-        if (m->Fill(in, gap, out, &rec) && GapWritten(*out, gap)) {
+        std::string implausible;
+        if (m->Fill(in, gap, out, &rec) && GapWritten(*out, gap) &&
+            (implausible = CheckFillSpeed(in, *out, gap, guard)).empty()) {
           rec.marker = gap.marker;
           rec.start = gap.start;
           rec.length = gap.length;
@@ -118,7 +189,7 @@ FillReport FillGaps(const MarkerArray& in, const std::vector<const GapFiller*>& 
           break;
         }
         RestoreGap(in, gap, out);
-        why = "the fill failed";
+        why = implausible.empty() ? "the fill failed" : implausible;
       }
       if (why.empty()) why = "cannot fill this gap";
       if (!reasons.empty()) reasons += "; ";

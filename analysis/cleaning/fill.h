@@ -67,11 +67,34 @@ struct FillReport {
   int64_t unfilled_samples() const;
 };
 
+// A plausibility check applied to every fill before it is accepted (a fill
+// that fails it is undone and the gap offered to the next method): the fill's
+// peak frame-to-frame speed, joins to the measured edge samples included, must
+// not exceed speed_factor × the largest of (a) the marker's peak measured speed
+// within context_frames on each side of the gap, (b) the mean speed needed to
+// cross the gap (edge to edge), (c) floor_mm_per_frame. A smoothing spline or
+// DCT bridging a long gap after a fast movement can overshoot by hundreds of
+// millimetres (seen on virtual-cuer hand gaps of 40-60 frames): such a fill is
+// refused rather than written. The fill must also stay near the measured
+// samples of the context: no filled sample may lie farther outside their
+// bounding box than box_margin × the box's diagonal (or box_floor_mm, when
+// larger). speed_factor 0 turns both checks off.
+struct FillGuardOptions {
+  double speed_factor = 2.0;
+  int context_frames = 30;
+  double floor_mm_per_frame = 1.0;
+  double box_margin = 0.25;
+  double box_floor_mm = 10.0;
+};
+// "" when the filled gap in `out` passes the check, else the reason.
+std::string CheckFillSpeed(const MarkerArray& in, const MarkerArray& out, const Gap& gap,
+                           const FillGuardOptions& guard);
+
 // Fills the gaps of `in` into *out (see the semantics above). Throws
 // InvalidInput when out is null or is `in`, or when a method is null.
 // progress (optional) is updated as "fill gaps" and may cancel (csw::Cancelled).
 FillReport FillGaps(const MarkerArray& in, const std::vector<const GapFiller*>& methods, int64_t max_gap_frames,
-                    MarkerArray* out, Progress* progress = nullptr);
+                    MarkerArray* out, Progress* progress = nullptr, const FillGuardOptions& guard = {});
 
 // For the gap report: which methods can handle each gap (no filling).
 struct GapMethods {

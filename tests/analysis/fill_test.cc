@@ -41,6 +41,10 @@ void Punch(MarkerArray* a, int marker, int64_t start, int64_t length) {
   for (int64_t f = start; f < start + length; ++f) a->SetMissing(f, marker);
 }
 
+// The driver's semantics are tested with constant fills, which the speed check
+// (tested on its own below) would refuse: it is off in those tests.
+const FillGuardOptions kNoGuard{0.0, 30, 1.0};
+
 // Fills gaps up to max_length frames with a constant; refuses longer ones.
 class ConstantFiller : public GapFiller {
  public:
@@ -87,7 +91,7 @@ TEST(CleaningFillGaps, FirstMethodThatCanFillTakesEachGap) {
   const MarkerArray before = in;
   ConstantFiller a("a", 1.0f, 3), b("b", 2.0f, 8);
   MarkerArray out;
-  FillReport rep = FillGaps(in, {&a, &b}, 0, &out);
+  FillReport rep = FillGaps(in, {&a, &b}, 0, &out, nullptr, kNoGuard);
   ASSERT_EQ(rep.filled.size(), 2u);
   EXPECT_EQ(rep.filled[0].method, "a");
   EXPECT_EQ(rep.filled[0].marker, 0);
@@ -128,7 +132,7 @@ TEST(CleaningFillGaps, MaximumGapAppliesToEveryMethod) {
   Punch(&in, 0, 12, 5);
   ConstantFiller any("any", 7.0f, 1000);
   MarkerArray out;
-  FillReport rep = FillGaps(in, {&any}, 4, &out);
+  FillReport rep = FillGaps(in, {&any}, 4, &out, nullptr, kNoGuard);
   ASSERT_EQ(rep.filled.size(), 1u);
   EXPECT_EQ(rep.filled[0].start, 3);
   ASSERT_EQ(rep.unfilled.size(), 1u);
@@ -144,12 +148,12 @@ TEST(CleaningFillGaps, FailedFillIsUndoneAndPassesToTheNextMethod) {
   FailingFiller bad;
   ConstantFiller good("good", 5.0f, 10);
   MarkerArray out;
-  FillReport rep = FillGaps(in, {&bad, &good}, 0, &out);
+  FillReport rep = FillGaps(in, {&bad, &good}, 0, &out, nullptr, kNoGuard);
   ASSERT_EQ(rep.filled.size(), 1u);
   EXPECT_EQ(rep.filled[0].method, "good");
   for (int64_t f = 8; f < 11; ++f) EXPECT_EQ(out.at(f, 0)[0], 5.0f);
   // Alone, the failing method leaves the gap missing with the reason.
-  rep = FillGaps(in, {&bad}, 0, &out);
+  rep = FillGaps(in, {&bad}, 0, &out, nullptr, kNoGuard);
   ASSERT_EQ(rep.unfilled.size(), 1u);
   EXPECT_EQ(rep.unfilled[0].second, "failing: the fill failed");
   for (int64_t f = 8; f < 11; ++f) EXPECT_FALSE(out.Visible(f, 0));
@@ -416,6 +420,29 @@ TEST(CleaningFillVirtualCuer, MethodsScoredAgainstTheCleanCaptureByGapLength) {
   EXPECT_LE(scores[0][1].Mean(), 4.0);
   EXPECT_LE(scores[2][2].Mean(), 14.0);
   EXPECT_LE(scores[6][0].Mean(), 0.7);
+}
+
+// The speed check: a fill that jumps away from the measured samples is refused
+// (and the gap passed on), one that follows the motion is accepted.
+TEST(CleaningFillGaps, SpeedCheckRefusesAFillThatOvershoots) {
+  MarkerArray in = Ramp(100, 2);  // 1 mm/frame along x and z: ~1.4 mm/frame
+  Punch(&in, 1, 40, 10);
+  ConstantFiller far("far", 500.0f, 100);  // jumps ~450 mm into the gap
+  MarkerArray out;
+  FillReport rep = FillGaps(in, {&far}, 0, &out);
+  ASSERT_EQ(rep.filled.size(), 0u);
+  ASSERT_EQ(rep.unfilled.size(), 1u);
+  EXPECT_NE(rep.unfilled[0].second.find("far: fill refused: peak speed"), std::string::npos) << rep.unfilled[0].second;
+  EXPECT_FALSE(out.Visible(45, 1)) << "a refused fill is undone";
+  // The exact line through the gap: 1.41 mm/frame, within 2 x the measured 1.41.
+  const MarkerArray& truth = Ramp(100, 2);
+  EXPECT_EQ(CheckFillSpeed(in, truth, rep.unfilled[0].first, FillGuardOptions{}), "");
+  // Twice as fast as anything measured around it, and more than needed: refused.
+  MarkerArray fast = truth;
+  for (int64_t f = 40; f < 50; ++f)
+    fast.at(f, 1)[0] = static_cast<float>(40 + 3.5 * (f - 40) - (f >= 45 ? 7.0 * (f - 45) : 0));
+  EXPECT_NE(CheckFillSpeed(in, fast, rep.unfilled[0].first, FillGuardOptions{}), "");
+  EXPECT_EQ(CheckFillSpeed(in, fast, rep.unfilled[0].first, FillGuardOptions{0.0, 30, 1.0}), "") << "off at factor 0";
 }
 
 }  // namespace

@@ -378,3 +378,84 @@ TEST(ErrorBars, RefusesBadNumbers) {
 
 }  // namespace
 }  // namespace csw::report
+
+namespace csw::report {
+namespace {
+
+constexpr Rgb kAllMissing{150, 20, 20};  // SaveGapMap's colour of a cell whose frames are all missing
+constexpr Rgb kFirstFill{215, 40, 40};   // SaveGapFill's colour of the first fill
+
+TEST(GapMap, FullyMissingCellsSitInTheMarkersRowAndTimeSpan) {
+  testing::TempDir dir;
+  // 4 markers, 10 s at 100 Hz; marker "B" misses 2-4 s, marker "D" 8-10 s.
+  const std::vector<std::string> names = {"A", "B", "C", "D"};
+  const std::vector<std::vector<std::pair<int64_t, int64_t>>> gaps = {{}, {{200, 200}}, {}, {{800, 200}}};
+  SaveGapMap((dir / "g.png").string(), "Gaps of take t", names, gaps, 1000, 100.0);
+  SaveGapMap((dir / "g.svg").string(), "Gaps of take t", names, gaps, 1000, 100.0);
+  const QImage image = LoadPng(dir / "g.png");
+  ASSERT_EQ(image.width(), kFigureWidth);
+  const Box all = Find(image, kAllMissing, 0, image.width(), kHeader, image.height());
+  ASSERT_GT(all.count, 0);
+  // Two blocks: B's (starts at 20 % of the time axis) above D's (ends at 100 %).
+  const int mid = (all.top + all.bottom) / 2;
+  const Box b = Find(image, kAllMissing, 0, image.width(), all.top, mid);
+  const Box d = Find(image, kAllMissing, 0, image.width(), mid + 1, all.bottom + 1);
+  ASSERT_GT(b.count, 0);
+  ASSERT_GT(d.count, 0);
+  EXPECT_LT(b.bottom, d.top) << "B's row is above D's";
+  // D's block spans 8-10 s and B's 2-4 s: the same width, D's ending at the axis end.
+  EXPECT_NEAR(b.width(), d.width(), 3);
+  const double axis_px = d.right - b.left;  // from 2 s to 10 s = 8 s
+  EXPECT_NEAR(b.width() / axis_px, 2.0 / 8.0, 0.02);
+  // One row each; C's row (no gap) lies between them, as tall as theirs.
+  EXPECT_NEAR(d.top - b.bottom - 1, b.height(), 3);
+  const QString svg = SvgText(dir / "g.svg");
+  for (const char* s : {"Gaps of take t", "A", "B", "D", "time (s)", "fraction of frames missing"})
+    EXPECT_TRUE(svg.contains(QString::fromUtf8(s))) << s;
+}
+
+TEST(GapMap, RefusesBadInputNamingTheFile) {
+  testing::TempDir dir;
+  const std::string path = (dir / "g.png").string();
+  EXPECT_THROW(SaveGapMap(path, "t", {}, {}, 10, 100), InvalidInput);
+  EXPECT_THROW(SaveGapMap(path, "t", {"A"}, {}, 10, 100), InvalidInput);
+  EXPECT_THROW(SaveGapMap(path, "t", {"A"}, {{}}, 0, 100), InvalidInput);
+  const std::string outside = ThrownMessage([&] { SaveGapMap(path, "t", {"A"}, {{{8, 5}}}, 10, 100); });
+  EXPECT_NE(outside.find(path), std::string::npos) << outside;
+  EXPECT_NE(outside.find("marker A"), std::string::npos) << outside;
+  EXPECT_TRUE(Listing(dir.path()).empty());
+}
+
+TEST(GapFill, TheFillIsDrawnOnlyOverTheShadedGap) {
+  testing::TempDir dir;
+  const int n = 101;  // 1 s at 100 Hz; the gap is 0.4-0.6 s
+  std::vector<double> t(n);
+  Eigen::Matrix3Xd measured(3, n), truth(3, n), fill(3, n);
+  for (int i = 0; i < n; ++i) {
+    t[static_cast<size_t>(i)] = i / 100.0;
+    for (int c = 0; c < 3; ++c) truth(c, i) = 10 * std::sin(6.283 * t[static_cast<size_t>(i)] + c);
+    measured.col(i) = truth.col(i);
+    fill.col(i) = truth.col(i).array() + 0.5;
+    if (i > 40 && i < 60) measured.col(i).setConstant(NAN);
+  }
+  SaveGapFill((dir / "f.png").string(), "Marker X", t, measured, truth, {{"spline fill", fill}}, 0.40, 0.60);
+  SaveGapFill((dir / "f.svg").string(), "Marker X", t, measured, truth, {{"spline fill", fill}}, 0.40, 0.60);
+  const QImage image = LoadPng(dir / "f.png");
+  ASSERT_EQ(image.size(), QSize(kFigureWidth, 900));
+  // The fill's colour below the legend: only over a fifth of the time axis, in the middle.
+  const int below_legend = 130;
+  const Box f = Find(image, kFirstFill, 0, image.width(), below_legend, image.height());
+  ASSERT_GT(f.count, 0);
+  const Box dots = Find(image, Rgb{20, 20, 20}, 0, image.width(), below_legend, image.height());
+  ASSERT_GT(dots.count, 0);
+  const double axis_px = dots.right - dots.left;  // the measured samples span 0-1 s
+  EXPECT_NEAR(f.width() / axis_px, 0.2, 0.03);
+  EXPECT_NEAR((f.left - dots.left) / axis_px, 0.4, 0.03);
+  const QString svg = SvgText(dir / "f.svg");
+  for (const char* s : {"Marker X", "spline fill", "truth (clean capture)", "measured", "x (mm)", "z (mm)"})
+    EXPECT_TRUE(svg.contains(QString::fromUtf8(s))) << s;
+  EXPECT_THROW(SaveGapFill((dir / "bad.png").string(), "t", t, measured.leftCols(5), truth, {}, 0, 1), InvalidInput);
+}
+
+}  // namespace
+}  // namespace csw::report

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "workbench/jobs/clean_job.h"
 #include "workbench/jobs/jobs.h"
 #include "workbench/jobs/model_jobs.h"
 
@@ -271,6 +272,64 @@ class InvertCommand : public Command {
   bool json_ = false;
 };
 
+class CleanCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("clean",
+                              "Clean takes before fitting: detect label swaps and spikes, report the gaps and "
+                              "which methods can fill them, fill gaps (spline, rigid, pattern, dct, model), "
+                              "filter; the result is a new take <take>.filled (docs/cleaning.md)");
+    sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
+    sub_->add_option("--takes", options_.takes,
+                     "Takes, comma-separated names or glob patterns ('h00*'); \\ escapes * ? [ ] @ , "
+                     "(docs/cli.md); default every take but fill versions");
+    sub_->add_option("--markerset", options_.markerset,
+                     "Marker-set JSON (clusters and segments for the rigid and pattern fills); default the one "
+                     "each take was imported with");
+    sub_->add_option("--fill", options_.fill,
+                     "Fill methods, tried in this order for each gap: spline,rigid,pattern,dct,model "
+                     "(default: report only)");
+    sub_->add_option("--max-gap", options_.max_gap_s, "Longest gap filled, in seconds (0 = no limit)")
+        ->capture_default_str();
+    sub_->add_option("--spline", options_.spline, "Spline: smoothing (GCV), cubic or quintic")
+        ->check(CLI::IsMember({"smoothing", "cubic", "quintic"}))
+        ->capture_default_str();
+    sub_->add_option("--side-frames", options_.side_frames, "Spline and DCT: valid frames needed on each side")
+        ->capture_default_str();
+    sub_->add_option("--donor", options_.donors, "Pattern fill: MARKER=DONOR (repeatable); others choose a donor");
+    sub_->add_option("--models", options_.models, "Model file from csw fit, for --fill model");
+    sub_->add_option("--filter", options_.filter, "Low-pass filter after filling: butterworth or kalman")
+        ->check(CLI::IsMember({"butterworth", "kalman"}));
+    sub_->add_option("--cutoff", options_.cutoff_hz, "Butterworth: -3 dB frequency of the zero-phase filter (Hz)")
+        ->capture_default_str();
+    sub_->add_option("--order", options_.order, "Butterworth: order of one pass (2, 4, 6, 8)")->capture_default_str();
+    sub_->add_option("--kalman-model", options_.kalman_model, "Kalman: velocity or acceleration")
+        ->check(CLI::IsMember({"velocity", "acceleration"}))
+        ->capture_default_str();
+    sub_->add_flag("--fix-spikes", options_.fix_spikes, "Remove the detected spike samples (then fill them)");
+    sub_->add_flag("--fix-swaps", options_.fix_swaps, "Exchange back the markers of each detected label swap");
+    sub_->add_flag("--dry-run", options_.dry_run, "Report only: write no take");
+    sub_->add_option("--truth", options_.truth,
+                     "Folder with <take>.clean.c3d (csw simulate --clean): score every filled sample against it");
+    sub_->add_option("--figures", options_.figures, "Folder for each take's gap map and its longest filled gap (PNG)");
+    sub_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::Clean(options_, progress);
+    if (json_) {
+      PrintJson(r);
+    } else {
+      std::cout << jobs::CleanText(r);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::CleanOptions options_;
+  bool json_ = false;
+};
+
 class PackCommand : public Command {
  public:
   void Register(CLI::App& app) override {
@@ -329,6 +388,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<SimulateCommand>());
   c.push_back(std::make_unique<FitCommand>());
   c.push_back(std::make_unique<InvertCommand>());
+  c.push_back(std::make_unique<CleanCommand>());
   c.push_back(std::make_unique<PackCommand>());
   c.push_back(std::make_unique<UpgradeCommand>());
   return c;

@@ -99,4 +99,15 @@ void SaveParameterEffects(const std::string& path, const std::string& title, con
   Check(Api().save_parameter_effects(path, title, neutral, effects, sticks));
 }
 
+void SaveGapMap(const std::string& path, const std::string& title, const std::vector<std::string>& names,
+                const std::vector<std::vector<std::pair<int64_t, int64_t>>>& gaps, int64_t frames, double rate_hz) {
+  Check(Api().save_gap_map(path, title, names, gaps, frames, rate_hz));
+}
+
+void SaveGapFill(const std::string& path, const std::string& title, const std::vector<double>& time_s,
+                 const Eigen::Matrix3Xd& measured, const Eigen::Matrix3Xd& truth,
+                 const std::vector<report::FillSeries>& fills, double gap_start_s, double gap_end_s) {
+  Check(Api().save_gap_fill(path, title, time_s, measured, truth, fills, gap_start_s, gap_end_s));
+}
+
 }  // namespace csw::jobs::figures

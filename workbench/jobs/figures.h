@@ -8,6 +8,7 @@
 // in). Each Save* throws InvalidInput naming the paths tried when the module
 // cannot be loaded, and InvalidInput with the module's message (naming the
 // file) when drawing fails.
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,5 +27,10 @@ void SaveVarianceExplained(const std::string& path, const std::string& title, co
 void SaveParameterEffects(const std::string& path, const std::string& title, const Eigen::Matrix3Xd& neutral,
                           const std::vector<report::ParameterEffect>& effects,
                           const std::vector<std::pair<int, int>>& sticks);
+void SaveGapMap(const std::string& path, const std::string& title, const std::vector<std::string>& names,
+                const std::vector<std::vector<std::pair<int64_t, int64_t>>>& gaps, int64_t frames, double rate_hz);
+void SaveGapFill(const std::string& path, const std::string& title, const std::vector<double>& time_s,
+                 const Eigen::Matrix3Xd& measured, const Eigen::Matrix3Xd& truth,
+                 const std::vector<report::FillSeries>& fills, double gap_start_s, double gap_end_s);
 
 }  // namespace csw::jobs::figures

@@ -361,4 +361,26 @@ json Invert(const InvertOptions& options, Progress& progress) {
   return summary;
 }
 
+MarkerArray ModelReconstruction(const Take& take, const InvertOptions& options, const std::string& where,
+                                Progress& progress) {
+  const ModelFile models = LoadModelFile(options.models);
+  const std::vector<std::unique_ptr<ModelRun>> runs = MakeRuns(models, options);
+  MarkerArray out(take.frames(), take.markers.markers());
+  for (const auto& run : runs) {
+    const std::vector<int> cols = BindNames(run->set, take.marker_names, run->names, where);
+    const MarkerArray input = Extract(take.markers, cols, 0, take.frames());
+    InversionResult result = run->face ? InvertFace(*run->face, input, options.inversion, &progress)
+                                       : InvertHand(*run->hand, input, options.inversion, &progress);
+    const bool gaussian = run->hand && !run->hand->fill.empty() && options.inversion.gaussian_fill;
+    if (options.edge_correction && !gaussian) CorrectGapsWithEdgeResiduals(input, &result);
+    for (int64_t f = 0; f < result.frames(); ++f) {
+      for (size_t c = 0; c < cols.size(); ++c) {
+        const float* src = result.reconstructed.at(f, static_cast<int64_t>(c));
+        if (!IsMissing(src[0])) std::copy(src, src + 3, out.at(f, cols[c]));
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace csw::jobs

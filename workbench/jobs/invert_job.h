@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/progress.h"
+#include "core/take.h"
 #include "models/inversion.h"
 
 namespace csw::jobs {
@@ -34,5 +35,13 @@ struct InvertOptions {
 // absolute errors (mm) of visible samples; hidden and occluded samples when
 // asked; pose errors against the truth. model_reports.h: InvertText renders it.
 nlohmann::json Invert(const InvertOptions& options, Progress& progress);
+
+// The models' reconstruction of one whole take, in the take's column layout:
+// every marker that a model of the file (options.only: "face", "hand", "" =
+// all) reconstructs, NaN elsewhere and where a frame's solve gives nothing.
+// Gaps get the same edge correction as `csw invert --fill`. For `csw clean
+// --fill model`. `where` names the take in errors (unbound model markers).
+MarkerArray ModelReconstruction(const Take& take, const InvertOptions& options, const std::string& where,
+                                Progress& progress);
 
 }  // namespace csw::jobs

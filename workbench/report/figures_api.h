@@ -13,7 +13,7 @@
 
 namespace csw::report {
 
-inline constexpr int kFiguresApiVersion = 1;
+inline constexpr int kFiguresApiVersion = 2;
 
 struct FiguresApi {
   int version = kFiguresApiVersion;
@@ -25,6 +25,13 @@ struct FiguresApi {
   std::string (*save_parameter_effects)(const std::string& path, const std::string& title,
                                         const Eigen::Matrix3Xd& neutral, const std::vector<ParameterEffect>& effects,
                                         const std::vector<std::pair<int, int>>& sticks) = nullptr;
+  // Version 2: the cleaning figures.
+  std::string (*save_gap_map)(const std::string& path, const std::string& title, const std::vector<std::string>& names,
+                              const std::vector<std::vector<std::pair<int64_t, int64_t>>>& gaps, int64_t frames,
+                              double rate_hz) = nullptr;
+  std::string (*save_gap_fill)(const std::string& path, const std::string& title, const std::vector<double>& time_s,
+                               const Eigen::Matrix3Xd& measured, const Eigen::Matrix3Xd& truth,
+                               const std::vector<FillSeries>& fills, double gap_start_s, double gap_end_s) = nullptr;
 };
 
 }  // namespace csw::report

@@ -35,10 +35,23 @@ std::string SaveParameterEffects(const std::string& path, const std::string& tit
   return Guarded([&] { csw::report::SaveParameterEffects(path, title, neutral, effects, sticks); });
 }
 
+std::string SaveGapMap(const std::string& path, const std::string& title, const std::vector<std::string>& names,
+                       const std::vector<std::vector<std::pair<int64_t, int64_t>>>& gaps, int64_t frames,
+                       double rate_hz) {
+  return Guarded([&] { csw::report::SaveGapMap(path, title, names, gaps, frames, rate_hz); });
+}
+
+std::string SaveGapFill(const std::string& path, const std::string& title, const std::vector<double>& time_s,
+                        const Eigen::Matrix3Xd& measured, const Eigen::Matrix3Xd& truth,
+                        const std::vector<csw::report::FillSeries>& fills, double gap_start_s, double gap_end_s) {
+  return Guarded(
+      [&] { csw::report::SaveGapFill(path, title, time_s, measured, truth, fills, gap_start_s, gap_end_s); });
+}
+
 }  // namespace
 
 extern "C" __attribute__((visibility("default"))) const csw::report::FiguresApi* csw_figures_api() {
   static const csw::report::FiguresApi api{csw::report::kFiguresApiVersion, &SaveErrorBars, &SaveVarianceExplained,
-                                           &SaveParameterEffects};
+                                           &SaveParameterEffects,           &SaveGapMap,    &SaveGapFill};
   return &api;
 }

@@ -10,6 +10,7 @@
 #include <QThread>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <mutex>
 
@@ -457,6 +458,173 @@ void SaveParameterEffects(const std::string& path, const std::string& title, con
     rect->axis(QCPAxis::atBottom)->setRange(xc - area.width() * mm_per_px / 2, xc + area.width() * mm_per_px / 2);
     rect->axis(QCPAxis::atLeft)->setRange(zc - area.height() * mm_per_px / 2, zc + area.height() * mm_per_px / 2);
   }
+  plot.Save(path);
+}
+
+void SaveGapMap(const std::string& path, const std::string& title, const std::vector<std::string>& names,
+                const std::vector<std::vector<std::pair<int64_t, int64_t>>>& gaps, int64_t frames, double rate_hz) {
+  FigureFormat(Q(path));
+  if (names.empty()) throw InvalidInput(path + ": no markers to plot");
+  if (names.size() != gaps.size())
+    throw InvalidInput(path + ": " + std::to_string(names.size()) + " marker names for " + std::to_string(gaps.size()) +
+                       " gap lists");
+  if (frames <= 0 || !(rate_hz > 0)) throw InvalidInput(path + ": frames and rate must be positive");
+  for (size_t m = 0; m < gaps.size(); ++m)
+    for (const auto& [start, length] : gaps[m])
+      if (start < 0 || length <= 0 || start + length > frames)
+        throw InvalidInput(path + ": marker " + names[m] + ": gap (" + std::to_string(start) + ", " +
+                           std::to_string(length) + ") outside the take's " + std::to_string(frames) + " frames");
+  EnsureGuiApplication();
+
+  const int n = static_cast<int>(names.size());
+  const int height = std::clamp(170 + 11 * n, 420, 1500);
+  Canvas plot(kFigureWidth, height);
+  StyleAxes(plot.axisRect());
+  const int bins = static_cast<int>(std::min<int64_t>(frames, 1000));
+  const double duration = static_cast<double>(frames) / rate_hz;
+  auto* map = new QCPColorMap(plot.xAxis, plot.yAxis);
+  map->data()->setSize(bins, n);
+  map->data()->setRange(QCPRange(0.5 * duration / bins, duration - 0.5 * duration / bins), QCPRange(0, n - 1));
+  std::vector<double> missing(static_cast<size_t>(bins));
+  for (int m = 0; m < n; ++m) {
+    std::fill(missing.begin(), missing.end(), 0.0);
+    for (const auto& [start, length] : gaps[static_cast<size_t>(m)]) {
+      for (int64_t f = start; f < start + length; ++f) {
+        const int b = static_cast<int>(f * bins / frames);
+        missing[static_cast<size_t>(b)] += 1.0;
+      }
+    }
+    for (int b = 0; b < bins; ++b) {
+      const int64_t lo = static_cast<int64_t>(b) * frames / bins, hi = static_cast<int64_t>(b + 1) * frames / bins;
+      const double per_bin = static_cast<double>(std::max<int64_t>(1, hi - lo));
+      // Row 0 at the top: the first marker is drawn first, as in the take.
+      map->data()->setCell(b, n - 1 - m, missing[static_cast<size_t>(b)] / per_bin);
+    }
+  }
+  QCPColorGradient gradient;
+  gradient.setColorStopAt(0.0, QColor(255, 255, 255));
+  gradient.setColorStopAt(0.02, QColor(250, 215, 190));
+  gradient.setColorStopAt(1.0, QColor(150, 20, 20));
+  gradient.setLevelCount(64);
+  map->setGradient(gradient);
+  map->setDataRange(QCPRange(0, 1));
+  map->setInterpolate(false);
+  auto* scale = new QCPColorScale(&plot);
+  plot.plotLayout()->addElement(0, 1, scale);
+  scale->setType(QCPAxis::atRight);
+  scale->setDataRange(QCPRange(0, 1));
+  scale->setGradient(gradient);
+  scale->axis()->setLabel(QStringLiteral("fraction of frames missing"));
+  scale->axis()->setTickLabelFont(Font(9));
+  scale->axis()->setLabelFont(Font(10));
+  map->setColorScale(scale);
+
+  auto ticker = QSharedPointer<QCPAxisTickerText>::create();
+  QFontMetrics fm(Font(8));
+  const double row_px = static_cast<double>(height - 170) / n;
+  const int step = std::max(1, static_cast<int>(std::ceil(fm.height() * 1.05 / std::max(row_px, 1.0))));
+  for (int m = 0; m < n; m += step) ticker->addTick(n - 1 - m, Elide(names[static_cast<size_t>(m)], Font(8)));
+  plot.yAxis->setTicker(ticker);
+  plot.yAxis->setTickLabelFont(Font(8));
+  plot.yAxis->setSubTicks(false);
+  plot.yAxis->grid()->setVisible(false);
+  plot.yAxis->setRange(-0.5, n - 0.5);
+  plot.yAxis->setLabel(step == 1 ? QStringLiteral("marker") : QStringLiteral("marker (every %1th named)").arg(step));
+  plot.xAxis->setRange(0, duration);
+  plot.xAxis->setLabel(QStringLiteral("time (s)"));
+  plot.xAxis->grid()->setVisible(false);
+  AddHeader(plot, title, nullptr);
+  plot.Save(path);
+}
+
+void SaveGapFill(const std::string& path, const std::string& title, const std::vector<double>& time_s,
+                 const Eigen::Matrix3Xd& measured, const Eigen::Matrix3Xd& truth, const std::vector<FillSeries>& fills,
+                 double gap_start_s, double gap_end_s) {
+  FigureFormat(Q(path));
+  const Eigen::Index n = static_cast<Eigen::Index>(time_s.size());
+  if (n < 2) throw InvalidInput(path + ": fewer than 2 samples to plot");
+  if (measured.cols() != n || (truth.cols() != 0 && truth.cols() != n))
+    throw InvalidInput(path + ": series and times differ in length");
+  for (const FillSeries& f : fills)
+    if (f.xyz.cols() != n) throw InvalidInput(path + ": fill '" + f.name + "' and times differ in length");
+  EnsureGuiApplication();
+
+  static const Rgb kFillColours[] = {{215, 40, 40}, {30, 80, 220}, {30, 150, 60}, {235, 130, 30}, {140, 60, 170}};
+  Canvas plot(kFigureWidth, 900);
+  const char* axis_names[] = {"x (mm)", "y (mm)", "z (mm)"};
+  QCPLegend* legend = plot.legend;
+  std::vector<QCPAxisRect*> rects;
+  for (int c = 0; c < 3; ++c) {
+    QCPAxisRect* rect = c == 0 ? plot.axisRect() : new QCPAxisRect(&plot);
+    if (c > 0) plot.plotLayout()->addElement(c, 0, rect);
+    StyleAxes(rect);
+    rects.push_back(rect);
+    QCPAxis* x = rect->axis(QCPAxis::atBottom);
+    QCPAxis* y = rect->axis(QCPAxis::atLeft);
+    y->setLabel(QString::fromLatin1(axis_names[c]));
+    if (c == 2) x->setLabel(QStringLiteral("time (s)"));
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    auto track = [&](double v) {
+      if (std::isfinite(v)) {
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+    };
+    if (truth.cols() == n) {
+      auto* g = new QCPGraph(x, y);
+      g->setPen(QPen(Colour(kNeutralColour), 2.5));
+      if (c == 0) {
+        g->setName(QStringLiteral("truth (clean capture)"));
+        legend->addItem(new QCPPlottableLegendItem(legend, g));
+      }
+      for (Eigen::Index i = 0; i < n; ++i) {
+        g->addData(time_s[static_cast<size_t>(i)], truth(c, i));
+        track(truth(c, i));
+      }
+    }
+    for (size_t k = 0; k < fills.size(); ++k) {
+      auto* g = new QCPGraph(x, y);
+      g->setPen(QPen(Colour(kFillColours[k % std::size(kFillColours)]), 1.8));
+      if (c == 0) {
+        g->setName(Q(fills[k].name));
+        legend->addItem(new QCPPlottableLegendItem(legend, g));
+      }
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const double t = time_s[static_cast<size_t>(i)];
+        if (t < gap_start_s - 1e-9 || t > gap_end_s + 1e-9) continue;
+        g->addData(t, fills[k].xyz(c, i));
+        track(fills[k].xyz(c, i));
+      }
+    }
+    auto* dots = new QCPGraph(x, y);
+    dots->setLineStyle(QCPGraph::lsNone);
+    dots->setScatterStyle(QCPScatterStyle(QCPScatterStyle::ssDisc, QColor(20, 20, 20), 4));
+    if (c == 0) {
+      dots->setName(QStringLiteral("measured"));
+      legend->addItem(new QCPPlottableLegendItem(legend, dots));
+    }
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!std::isfinite(measured(c, i))) continue;
+      dots->addData(time_s[static_cast<size_t>(i)], measured(c, i));
+      track(measured(c, i));
+    }
+    if (!std::isfinite(lo)) lo = hi = 0;
+    const double pad = std::max(0.5, 0.08 * (hi - lo));
+    y->setRange(lo - pad, hi + pad);
+    x->setRange(time_s.front(), time_s.back());
+    auto* shade = new QCPItemRect(&plot);
+    shade->setClipAxisRect(rect);
+    shade->topLeft->setAxes(x, y);
+    shade->bottomRight->setAxes(x, y);
+    shade->topLeft->setCoords(gap_start_s, hi + pad);
+    shade->bottomRight->setCoords(gap_end_s, lo - pad);
+    shade->setPen(Qt::NoPen);
+    shade->setBrush(QColor(120, 120, 120, 28));
+    shade->setLayer(QStringLiteral("background"));
+  }
+  auto* group = new QCPMarginGroup(&plot);
+  for (QCPAxisRect* r : rects) r->setMarginGroup(QCP::msLeft | QCP::msRight, group);
+  AddHeader(plot, title, legend);
   plot.Save(path);
 }
 

@@ -7,6 +7,7 @@
 // naming the path. Drawn with QCustomPlot offscreen: every Save* function
 // calls EnsureGuiApplication() first and must run on the main thread.
 #include <Eigen/Core>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -78,5 +79,26 @@ void SaveParameterEffects(const std::string& path, const std::string& title, con
 // The PNG size SaveParameterEffects writes for `parameters` panels: up to four
 // panels of 300 × 360 pixels per row, at least 600 pixels wide, plus a header.
 std::pair<int, int> ParameterEffectsSize(int parameters);
+
+// Gap map of a take (docs/cleaning.md): one row per marker (names as tick
+// labels, thinned when many), time in seconds across, each cell coloured by
+// the fraction of its frames missing (white = all seen, dark red = all
+// missing). gaps[m] lists marker m's gaps as (first frame, length).
+// InvalidInput: names and gaps differ in size, no markers, frames or rate <= 0,
+// a gap outside [0, frames).
+void SaveGapMap(const std::string& path, const std::string& title, const std::vector<std::string>& names,
+                const std::vector<std::vector<std::pair<int64_t, int64_t>>>& gaps, int64_t frames, double rate_hz);
+
+// One filled gap, before and after: three stacked panels (x, y, z in mm)
+// against time (s) around the gap; the measured samples as black dots, the
+// truth (when given) as a grey line, and each method's fill over the gap as a
+// coloured line, with the gap shaded. Series are 3 × n (NaN = not drawn).
+struct FillSeries {
+  std::string name;      // legend entry, e.g. "spline (smoothing, GCV)"
+  Eigen::Matrix3Xd xyz;  // 3 × n
+};
+void SaveGapFill(const std::string& path, const std::string& title, const std::vector<double>& time_s,
+                 const Eigen::Matrix3Xd& measured, const Eigen::Matrix3Xd& truth, const std::vector<FillSeries>& fills,
+                 double gap_start_s, double gap_end_s);
 
 }  // namespace csw::report
