@@ -42,12 +42,50 @@ std::vector<Gap> FindGaps(const MarkerArray& markers, int marker) {
   return gaps;
 }
 
+namespace {
+
+// Every marker's gaps in one pass over the frames (the array is frame-major:
+// scanning one column at a time strides through memory), marker by marker.
+std::vector<std::vector<Gap>> GapsPerMarker(const MarkerArray& markers) {
+  const int64_t n = markers.frames(), nm = markers.markers();
+  std::vector<std::vector<Gap>> per(static_cast<size_t>(nm));
+  std::vector<int64_t> open(static_cast<size_t>(nm), -1);  // start of the gap in progress
+  for (int64_t f = 0; f < n; ++f) {
+    for (int64_t m = 0; m < nm; ++m) {
+      const bool missing = SampleMissing(markers, f, m);
+      int64_t& start = open[static_cast<size_t>(m)];
+      if (missing && start < 0) {
+        start = f;
+      } else if (!missing && start >= 0) {
+        Gap g;
+        g.marker = static_cast<int>(m);
+        g.start = start;
+        g.length = f - start;
+        g.leading = start == 0;
+        per[static_cast<size_t>(m)].push_back(g);
+        start = -1;
+      }
+    }
+  }
+  for (int64_t m = 0; m < nm; ++m) {
+    const int64_t start = open[static_cast<size_t>(m)];
+    if (start < 0) continue;
+    Gap g;
+    g.marker = static_cast<int>(m);
+    g.start = start;
+    g.length = n - start;
+    g.leading = start == 0;
+    g.trailing = true;
+    per[static_cast<size_t>(m)].push_back(g);
+  }
+  return per;
+}
+
+}  // namespace
+
 std::vector<Gap> FindAllGaps(const MarkerArray& markers) {
   std::vector<Gap> all;
-  for (int m = 0; m < markers.markers(); ++m) {
-    std::vector<Gap> g = FindGaps(markers, m);
-    all.insert(all.end(), g.begin(), g.end());
-  }
+  for (std::vector<Gap>& g : GapsPerMarker(markers)) all.insert(all.end(), g.begin(), g.end());
   return all;
 }
 
@@ -56,10 +94,11 @@ GapReport MakeGapReport(const MarkerArray& markers) {
   r.frames = markers.frames();
   r.markers = markers.markers();
   r.per_marker.reserve(static_cast<size_t>(r.markers));
+  std::vector<std::vector<Gap>> per = GapsPerMarker(markers);
   for (int m = 0; m < r.markers; ++m) {
     MarkerGaps mg;
     mg.marker = m;
-    mg.gaps = FindGaps(markers, m);
+    mg.gaps = std::move(per[static_cast<size_t>(m)]);
     for (const Gap& g : mg.gaps) {
       mg.missing_frames += g.length;
       mg.longest = std::max(mg.longest, g.length);

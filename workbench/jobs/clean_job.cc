@@ -514,7 +514,7 @@ json CleanTake(const Corpus& corpus, const TakeRange& range, const std::optional
       bo.cutoff_hz = options.cutoff_hz;
       bo.order = options.order;
       FilterReport fr;
-      markers = ButterworthFilter(markers, rate, bo, &fr);
+      ButterworthFilterInPlace(markers, rate, bo, &fr);
       flt["cutoff_hz"] = bo.cutoff_hz;
       flt["order"] = bo.order;
       flt["runs_filtered"] = fr.runs_filtered;

@@ -40,10 +40,10 @@ struct CleanOptions {
   std::string models;
   InversionOptions inversion;
   // filter
-  std::string filter;                     // "", "butterworth" or "kalman"
-  double cutoff_hz = 10;                  // butterworth: where the zero-phase response is -3 dB
-  int order = 4;                          // butterworth: single-pass order (even, 2-8)
-  std::string kalman_model = "velocity";  // kalman: velocity or acceleration
+  std::string filter;     // "", "butterworth" or "kalman"
+  double cutoff_hz = 15;  // butterworth: where the zero-phase response is -3 dB (docs/cleaning-filter.md)
+  int order = 2;          // butterworth: single-pass order (even, 2-8; 2 = Winter's filter passed twice)
+  std::string kalman_model = "acceleration";  // kalman: velocity or acceleration (lower error on every take)
   // detection
   bool fix_spikes = false;
   bool fix_swaps = false;

@@ -529,7 +529,8 @@ void SaveGapMap(const std::string& path, const std::string& title, const std::ve
   plot.yAxis->setSubTicks(false);
   plot.yAxis->grid()->setVisible(false);
   plot.yAxis->setRange(-0.5, n - 0.5);
-  plot.yAxis->setLabel(step == 1 ? QStringLiteral("marker") : QStringLiteral("marker (every %1th named)").arg(step));
+  plot.yAxis->setLabel(step == 1 ? QStringLiteral("marker")
+                                 : QStringLiteral("marker (one name in %1 shown)").arg(step));
   plot.xAxis->setRange(0, duration);
   plot.xAxis->setLabel(QStringLiteral("time (s)"));
   plot.xAxis->grid()->setVisible(false);
@@ -551,6 +552,7 @@ void SaveGapFill(const std::string& path, const std::string& title, const std::v
 
   static const Rgb kFillColours[] = {{215, 40, 40}, {30, 80, 220}, {30, 150, 60}, {235, 130, 30}, {140, 60, 170}};
   Canvas plot(kFigureWidth, 900);
+  plot.setAutoAddPlottableToLegend(false);
   const char* axis_names[] = {"x (mm)", "y (mm)", "z (mm)"};
   QCPLegend* legend = plot.legend;
   std::vector<QCPAxisRect*> rects;
