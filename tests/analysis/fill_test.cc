@@ -432,7 +432,9 @@ TEST(CleaningFillGaps, SpeedCheckRefusesAFillThatOvershoots) {
   FillReport rep = FillGaps(in, {&far}, 0, &out);
   ASSERT_EQ(rep.filled.size(), 0u);
   ASSERT_EQ(rep.unfilled.size(), 1u);
-  EXPECT_NE(rep.unfilled[0].second.find("far: fill refused: it leaves the box of the measured samples"), std::string::npos) << rep.unfilled[0].second;
+  EXPECT_NE(rep.unfilled[0].second.find("far: fill refused: it leaves the box of the measured samples"),
+            std::string::npos)
+      << rep.unfilled[0].second;
   EXPECT_FALSE(out.Visible(45, 1)) << "a refused fill is undone";
   // The exact line through the gap: 1.41 mm/frame, within 2 x the measured 1.41.
   const MarkerArray& truth = Ramp(100, 2);
