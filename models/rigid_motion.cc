@@ -1,6 +1,5 @@
 #include "models/rigid_motion.h"
 
-#include <ceres/rotation.h>
 #include <ceres/tiny_solver.h>
 #include <ceres/tiny_solver_autodiff_function.h>
 
@@ -12,6 +11,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "models/so3.h"
 
 namespace csw {
 namespace {
@@ -78,6 +78,27 @@ std::vector<int> UsableColumns(const Eigen::Matrix3Xd& reference, const Eigen::M
   return cols;
 }
 
+// q = R(aa) p by Rodrigues' formula, for doubles and Jets (ceres/rotation.h has
+// the same function but, without NDEBUG, glog DCHECKs that need the glog library,
+// which csw does not link). Near aa = 0 the first-order form q = p + aa × p has
+// the exact value and derivative at 0.
+template <typename T>
+void AngleAxisRotatePoint(const T* aa, const T* p, T* q) {
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  const T theta2 = aa[0] * aa[0] + aa[1] * aa[1] + aa[2] * aa[2];
+  const T cross[3] = {aa[1] * p[2] - aa[2] * p[1], aa[2] * p[0] - aa[0] * p[2], aa[0] * p[1] - aa[1] * p[0]};
+  if (theta2 > T(std::numeric_limits<double>::epsilon())) {
+    const T theta = sqrt(theta2);
+    const T c = cos(theta), s = sin(theta) / theta;
+    const T k = (aa[0] * p[0] + aa[1] * p[1] + aa[2] * p[2]) * (T(1.0) - c) / theta2;
+    for (int i = 0; i < 3; ++i) q[i] = p[i] * c + cross[i] * s + aa[i] * k;
+  } else {
+    for (int i = 0; i < 3; ++i) q[i] = p[i] + cross[i];
+  }
+}
+
 // Robust rigid refinement as a plain least-squares problem for
 // ceres::TinySolver (header-only: the csw binary does not link the Ceres
 // library): marker c contributes the 3-vector sqrt(rho(s)/s) r_c, with r_c =
@@ -114,7 +135,7 @@ struct RobustMarkerResiduals {
       const int c = (*cols)[i];
       const T p[3] = {T((*ref)(0, c)), T((*ref)(1, c)), T((*ref)(2, c))};
       T q[3];
-      ceres::AngleAxisRotatePoint(pose, p, q);
+      AngleAxisRotatePoint(pose, p, q);
       T r[3];
       for (int k = 0; k < 3; ++k) r[k] = q[k] + pose[3 + k] - T((*obs)(k, c));
       const T w = Scale(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
@@ -155,21 +176,13 @@ RigidTransform RigidTransform::Inverse() const {
 
 Eigen::Matrix<double, 6, 1> RigidTransform::Parameters() const {
   Eigen::Matrix<double, 6, 1> p;
-  double r[9];
-  Eigen::Map<Eigen::Matrix3d> rm(r);
-  rm = rotation;
-  double aa[3];
-  ceres::RotationMatrixToAngleAxis(r, aa);  // column-major 3x3
-  p << aa[0], aa[1], aa[2], translation(0), translation(1), translation(2);
+  p << so3::Log(rotation), translation;
   return p;
 }
 
 RigidTransform RigidTransform::FromParameters(const Eigen::Matrix<double, 6, 1>& p) {
   RigidTransform t;
-  const double aa[3] = {p(0), p(1), p(2)};
-  double r[9];
-  ceres::AngleAxisToRotationMatrix(aa, r);  // column-major 3x3
-  t.rotation = Eigen::Map<const Eigen::Matrix3d>(r);
+  t.rotation = so3::Exp(p.head<3>());
   t.translation = p.tail<3>();
   return t;
 }

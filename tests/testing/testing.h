@@ -6,6 +6,16 @@
 
 namespace csw::testing {
 
+// True in the AddressSanitizer build (scripts/test.sh, stage 2), where -O0 and
+// the sanitizers make virtual-cuer simulations 10-50 x slower: statistical
+// tests over many simulated takes run on a subset there (the full count runs
+// in stage 1); the sanitizers still see every code path.
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+
 // ../shared/data (from CSW_SHARED_DATA, set by ctest), or "" when absent.
 std::filesystem::path SharedDataDir();
 // SharedDataDir()/relative, or calls GTEST_SKIP-able empty path when absent.
