@@ -109,6 +109,8 @@ std::string SimulateOptions::Check() const {
   if (!(placement_sd_mm >= 0.0 && placement_sd_mm <= 30.0)) return "placement_sd_mm must be in [0, 30]";
   if (!(orientation_sd_deg >= 0.0 && orientation_sd_deg <= 20.0)) return "orientation_sd_deg must be in [0, 20]";
   if (std::string why = phasing.Check(); !why.empty()) return "phasing: " + why;
+  if (!(max_tip_speed_mm_s >= 0.0 && max_turn_speed_deg_s >= 0.0 && max_joint_speed_deg_s >= 0.0))
+    return "speed limits must be >= 0 (0 = no limit)";
   if (int16_c3d && !(c3d_scale_mm > 0.0 && c3d_scale_mm <= 10.0)) return "c3d_scale_mm must be in (0, 10]";
   for (const auto& s : sentences)
     if (s.find_first_not_of(" \t\r\n") == std::string::npos) return "a sentence is empty";
@@ -372,10 +374,33 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
     }
     shape0 = shape_t[0];
     place0 = place_t[0];
+    // Shortest duration of a movement under a peak-speed limit (minimum jerk:
+    // peak = 1.875 × distance / duration).
+    auto shortest = [](double distance, double limit) { return limit > 0.0 ? 1.875 * distance / limit : 0.0; };
     for (size_t i = 1; i < nk; ++i) {
-      shape_g.push_back({script.timing[i].shape_start_s, script.timing[i].shape_target_s, shape_t[i] - shape_t[i - 1]});
-      place_g.push_back(
-          {script.timing[i].placement_start_s, script.timing[i].placement_target_s, place_t[i] - place_t[i - 1]});
+      KeyTiming& kt = r.keys[i].timing;
+      const Eigen::VectorXd ds = shape_t[i] - shape_t[i - 1], dz = place_t[i] - place_t[i - 1];
+      const double shape_min = shortest(ds.head(nj).cwiseAbs().maxCoeff(), options_.max_joint_speed_deg_s * kDeg);
+      const double place_min =
+          std::max(shortest(dz.head<3>().norm(), options_.max_tip_speed_mm_s),
+                   shortest(dz.segment<3>(3).cwiseAbs().maxCoeff(), options_.max_turn_speed_deg_s * kDeg));
+      // Start earlier, but not before the previous target of the same movement
+      // (unless the draw already did); then, if still too short, reach later.
+      const KeyTiming& prev = r.keys[i - 1].timing;
+      auto stretch = [](double previous_target, double min_s, double& start, double& target) {
+        if (target - start >= min_s) return;
+        start = std::max(target - min_s, std::min(start, previous_target));
+        target = std::max(target, start + min_s);
+      };
+      stretch(i > 1 ? prev.shape_target_s : -1e9, shape_min, kt.shape_start_s, kt.shape_target_s);
+      stretch(i > 1 ? prev.placement_target_s : -1e9, place_min, kt.placement_start_s, kt.placement_target_s);
+      if (i == 1) {  // the first rest key's times are the instant the hand leaves rest
+        KeyTiming& rest = r.keys[0].timing;
+        const double leave = std::min({rest.placement_start_s, kt.placement_start_s, kt.shape_start_s});
+        rest = {leave, leave, leave, leave};
+      }
+      shape_g.push_back({kt.shape_start_s, kt.shape_target_s, ds});
+      place_g.push_back({kt.placement_start_s, kt.placement_target_s, dz});
     }
   }
 

@@ -49,6 +49,16 @@ struct SimulateOptions {
   // movement starts after the previous target, no blending).
   PhasingModel phasing;
   bool overlap_gestures = true;
+  // Peak speeds a movement may reach (0 = no limit). A drawn movement that would
+  // be faster starts earlier (its target time is kept: the phasing laws are about
+  // targets), so that its minimum-jerk peak (1.875 × distance / duration) stays
+  // under the limit: the reference fingertip in the head frame, the forearm's
+  // orientation angles, and each finger joint. Without them two independent
+  // start/target draws can leave 60 ms for a 150 mm move (peaks of 5-10 m/s,
+  // 30 mm second differences at 120 Hz); measured cueing moves peak near 1-2 m/s.
+  double max_tip_speed_mm_s = 1500.0;
+  double max_turn_speed_deg_s = 400.0;
+  double max_joint_speed_deg_s = 1000.0;
   // Per-key variability of the targets (truncated at 2.5 sd): joint angles,
   // fingertip point and forearm orientation.
   double posture_sd_deg = 3.0;

@@ -165,9 +165,17 @@ int SeenBetween(const MarkerArray& m, int a, int b, int64_t x, int64_t y) {
   return n;
 }
 
+// The corpus seed (1 by default); CSW_SWAP_EVAL_SEED=N reruns the evaluation on
+// other takes, as docs/cleaning-swaps.md reports for seeds 2-5.
+uint64_t EvalSeed() {
+  const char* s = std::getenv("CSW_SWAP_EVAL_SEED");
+  return s != nullptr && std::atoi(s) > 0 ? static_cast<uint64_t>(std::atoi(s)) : 1;
+}
+
 Tally RunCuer(bool swaps, int takes, int first_take) {
   SimulateOptions o;
   o.label_swaps = swaps;
+  o.seed = EvalSeed();
   VirtualCuer cuer(o);
   Tally tally;
   for (int t = first_take; t < first_take + takes; ++t) {
