@@ -38,8 +38,10 @@ fi
 
 stamp "build (ASan + UBSan)"
 # Debug (assertions on) but at -O1, as the AddressSanitizer documentation advises:
-# at -O0 the Eigen-heavy tests ran for 23 minutes.
-cmake -S . -B build/asan -G Ninja -DCSW_WERROR=ON -DCSW_SANITIZE=ON -DCSW_BUILD_BENCH=OFF \
+# at -O0 the Eigen-heavy tests ran for 23 minutes. Warnings are errors in the plain
+# build above; here they are not, since GCC at -O1 with the sanitizers warns
+# spuriously (maybe-uninitialized, stringop-overflow).
+cmake -S . -B build/asan -G Ninja -DCSW_WERROR=OFF -DCSW_SANITIZE=ON -DCSW_BUILD_BENCH=OFF \
   -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g" "-DCMAKE_C_FLAGS_DEBUG=-O1 -g" >/dev/null
 cmake --build build/asan -j"$jobs"
 stamp "tests under ASan + UBSan"

@@ -128,6 +128,75 @@ void FiltFiltRun(const std::vector<Biquad>& sections, int64_t pad, const double*
   for (int64_t i = 0; i < n; ++i) out[i] = work[static_cast<size_t>(pad + i)];
 }
 
+// The same cascade over the three interleaved coordinates of one marker,
+// y[3 i + c], i = 0..n, forwards or backwards in time: three independent
+// recursions per step instead of one (the filter is latency-bound).
+void CascadePass3(const std::vector<Biquad>& sections, double* y, int64_t n, bool backward) {
+  if (n == 0) return;
+  const int64_t first = backward ? n - 1 : 0;
+  const std::ptrdiff_t step = backward ? -3 : 3;
+  double c0[3];
+  for (int c = 0; c < 3; ++c) c0[c] = y[3 * first + c];
+  for (const Biquad& s : sections) {
+    double z1[3], z2[3];
+    for (int c = 0; c < 3; ++c) {
+      z1[c] = c0[c] * (1 - s.b0);
+      z2[c] = c0[c] * (s.b2 - s.a2);
+    }
+    double* p = y + 3 * first;
+    for (int64_t i = 0; i < n; ++i, p += step)
+      for (int c = 0; c < 3; ++c) {
+        const double in = p[c];
+        const double out = s.b0 * in + z1[c];
+        z1[c] = s.b1 * in - s.a1 * out + z2[c];
+        z2[c] = s.b2 * in - s.a2 * out;
+        p[c] = out;
+      }
+  }
+}
+
+// FiltFiltRun on interleaved coordinates, in place: x[3 i + c], i = 0..n (single
+// precision storage, as in the take; the filter runs in double precision).
+void FiltFiltRun3(const std::vector<Biquad>& sections, int64_t pad, float* x, int64_t n, std::vector<double>& work) {
+  work.resize(static_cast<size_t>(3 * (n + 2 * pad)));
+  double* w = work.data();
+  for (int c = 0; c < 3; ++c) {
+    for (int64_t k = 1; k <= pad; ++k) {
+      w[3 * (pad - k) + c] = 2.0 * x[c] - x[3 * k + c];
+      w[3 * (pad + n - 1 + k) + c] = 2.0 * x[3 * (n - 1) + c] - x[3 * (n - 1 - k) + c];
+    }
+  }
+  std::copy(x, x + 3 * n, w + 3 * pad);
+  CascadePass3(sections, w, n + 2 * pad, false);
+  CascadePass3(sections, w, n + 2 * pad, true);
+  for (int64_t i = 0; i < 3 * n; ++i) x[i] = static_cast<float>(w[3 * pad + i]);
+}
+
+// Block of markers gathered as one interleaved buffer per marker:
+// buf[k - k0][3 f + c], NaN where the frame is not valid.
+void GatherBlock3(const MarkerArray& m, int64_t k0, int64_t k1, const char* what,
+                  std::vector<std::vector<float>>& buf) {
+  const auto frames = static_cast<size_t>(m.frames());
+  buf.resize(static_cast<size_t>(k1 - k0));
+  for (auto& b : buf) b.resize(3 * frames);
+  for (int64_t f = 0; f < m.frames(); ++f)
+    for (int64_t k = k0; k < k1; ++k) {
+      const bool valid = FrameValid(m, f, k, what);
+      const float* p = m.at(f, k);
+      float* d = buf[static_cast<size_t>(k - k0)].data() + 3 * f;
+      for (int c = 0; c < 3; ++c) d[c] = valid ? p[c] : std::numeric_limits<float>::quiet_NaN();
+    }
+}
+
+void ScatterBlock3(const std::vector<std::vector<float>>& buf, int64_t k0, int64_t k1, MarkerArray& m) {
+  for (int64_t f = 0; f < m.frames(); ++f)
+    for (int64_t k = k0; k < k1; ++k) {
+      float* p = m.at(f, k);
+      const float* d = buf[static_cast<size_t>(k - k0)].data() + 3 * f;
+      std::copy(d, d + 3, p);
+    }
+}
+
 // Filters a channel run by run; `marker` only labels the report.
 void FilterChannel(const std::vector<Biquad>& sections, int64_t pad, int64_t min_run, const std::vector<double>& x,
                    const std::vector<SampleRun>& runs, std::vector<double>& y, std::vector<double>& work,
@@ -267,20 +336,26 @@ void ButterworthFilterInPlace(MarkerArray& markers, double rate_hz, const Butter
     *report = FilterReport();
     report->min_run_length = min_run;
   }
-  std::vector<std::vector<double>> buf;
-  std::vector<double> y, work;
+  std::vector<std::vector<float>> buf;
+  std::vector<double> work;
+  std::vector<bool> valid;
   for (int64_t k0 = 0; k0 < markers.markers(); k0 += kBlock) {
     const int64_t k1 = std::min(k0 + kBlock, markers.markers());
-    GatherBlock(markers, k0, k1, "Butterworth filter", buf);
+    GatherBlock3(markers, k0, k1, "Butterworth filter", buf);
     for (int64_t k = k0; k < k1; ++k) {
-      const std::vector<SampleRun> runs = ValidRuns(buf[static_cast<size_t>(3 * (k - k0))]);
-      for (int c = 0; c < 3; ++c) {
-        std::vector<double>& x = buf[static_cast<size_t>(3 * (k - k0) + c)];
-        FilterChannel(sections, pad, min_run, x, runs, y, work, report, k, c == 0);
-        x.swap(y);
+      std::vector<float>& x = buf[static_cast<size_t>(k - k0)];
+      valid.resize(static_cast<size_t>(markers.frames()));
+      for (size_t f = 0; f < valid.size(); ++f) valid[f] = !std::isnan(x[3 * f]);
+      for (const SampleRun& r : RunsOf(valid)) {
+        if (r.length >= min_run) {
+          FiltFiltRun3(sections, std::min(pad, r.length - 1), x.data() + 3 * r.start, r.length, work);
+          if (report) ++report->runs_filtered;
+        } else if (report) {
+          report->unfiltered.push_back({k, r.start, r.length});
+        }
       }
     }
-    ScatterBlock(buf, k0, k1, markers);
+    ScatterBlock3(buf, k0, k1, markers);
   }
 }
 
