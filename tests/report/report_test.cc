@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "tests/report/report_testing.h"
 #include "tests/testing/testing.h"
 
 // Qt and fontconfig keep process-lifetime caches that LeakSanitizer reports at
@@ -85,28 +86,6 @@ std::vector<int> BarHeights(const QImage& image, Rgb c, int y0) {
     }
   }
   return heights;
-}
-
-QImage LoadPng(const fs::path& path) {
-  QImage image(QString::fromStdString(path.string()));
-  return image.convertToFormat(QImage::Format_RGB32);
-}
-
-// The SVG parsed as XML (failing the test on a parse error) and all its text.
-QString SvgText(const fs::path& path) {
-  QFile file(QString::fromStdString(path.string()));
-  EXPECT_TRUE(file.open(QIODevice::ReadOnly)) << path;
-  QXmlStreamReader xml(&file);
-  QString text;
-  bool svg_root = false;
-  while (!xml.atEnd()) {
-    xml.readNext();
-    if (xml.isStartElement() && xml.name() == QStringLiteral("svg")) svg_root = true;
-    if (xml.isCharacters()) text += xml.text().toString() + "\n";
-  }
-  EXPECT_FALSE(xml.hasError()) << path << ": " << xml.errorString().toStdString();
-  EXPECT_TRUE(svg_root) << path;
-  return text;
 }
 
 std::vector<std::string> Listing(const fs::path& dir) {

@@ -1,5 +1,6 @@
 #include "tests/testing/testing.h"
 
+#include <cstdio>
 #include <cstdlib>
 #include <random>
 
@@ -52,6 +53,11 @@ TempDir::TempDir() {
 }
 
 TempDir::~TempDir() {
+  // CSW_KEEP_TEST_FILES=1 keeps the files (to look at a test's figures).
+  if (const char* keep = std::getenv("CSW_KEEP_TEST_FILES"); keep != nullptr && *keep != '\0' && *keep != '0') {
+    std::fprintf(stderr, "kept %s\n", path_.string().c_str());
+    return;
+  }
   std::error_code ec;
   fs::remove_all(path_, ec);
 }

@@ -26,7 +26,8 @@ std::string MissingSharedData(std::initializer_list<std::string> relative);
 // The project source tree (CSW_SOURCE_DIR).
 std::filesystem::path SourceDir();
 
-// A fresh temporary directory removed at destruction.
+// A fresh temporary directory removed at destruction (kept, and its path
+// printed, when the environment sets CSW_KEEP_TEST_FILES=1).
 class TempDir {
  public:
   TempDir();

@@ -110,4 +110,22 @@ void SaveGapFill(const std::string& path, const std::string& title, const std::v
   Check(Api().save_gap_fill(path, title, time_s, measured, truth, fills, gap_start_s, gap_end_s));
 }
 
+void SaveGesturalScore(const std::string& path, const std::string& title, const std::vector<float>& audio,
+                       double audio_rate_hz, double audio_start_s, const std::vector<report::PosteriorLane>& lanes,
+                       double frame_rate_hz, const std::vector<LabelTier>& tiers, double start_s, double end_s) {
+  Check(Api().save_gestural_score(path, title, audio, audio_rate_hz, audio_start_s, lanes, frame_rate_hz, tiers,
+                                  start_s, end_s));
+}
+
+void SaveHistograms(const std::string& path, const std::string& title,
+                    const std::vector<report::HistogramPanel>& panels, double bin_ms, const std::string& x_label) {
+  Check(Api().save_histograms(path, title, panels, bin_ms, x_label));
+}
+
+void SaveConfusionMatrix(const std::string& path, const std::string& title, const std::vector<std::string>& labels,
+                         const std::vector<std::vector<int>>& counts, const std::string& true_axis,
+                         const std::string& recognised_axis) {
+  Check(Api().save_confusion_matrix(path, title, labels, counts, true_axis, recognised_axis));
+}
+
 }  // namespace csw::jobs::figures

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "workbench/report/analysis_figures.h"
 #include "workbench/report/report.h"
 
 namespace csw::jobs::figures {
@@ -32,5 +33,14 @@ void SaveGapMap(const std::string& path, const std::string& title, const std::ve
 void SaveGapFill(const std::string& path, const std::string& title, const std::vector<double>& time_s,
                  const Eigen::Matrix3Xd& measured, const Eigen::Matrix3Xd& truth,
                  const std::vector<report::FillSeries>& fills, double gap_start_s, double gap_end_s);
+// The analysis figures (workbench/report/analysis_figures.h).
+void SaveGesturalScore(const std::string& path, const std::string& title, const std::vector<float>& audio,
+                       double audio_rate_hz, double audio_start_s, const std::vector<report::PosteriorLane>& lanes,
+                       double frame_rate_hz, const std::vector<LabelTier>& tiers, double start_s, double end_s);
+void SaveHistograms(const std::string& path, const std::string& title,
+                    const std::vector<report::HistogramPanel>& panels, double bin_ms, const std::string& x_label);
+void SaveConfusionMatrix(const std::string& path, const std::string& title, const std::vector<std::string>& labels,
+                         const std::vector<std::vector<int>>& counts, const std::string& true_axis = "true class",
+                         const std::string& recognised_axis = "recognised class");
 
 }  // namespace csw::jobs::figures

@@ -9,11 +9,12 @@
 #include <utility>
 #include <vector>
 
+#include "workbench/report/analysis_figures.h"
 #include "workbench/report/report.h"
 
 namespace csw::report {
 
-inline constexpr int kFiguresApiVersion = 2;
+inline constexpr int kFiguresApiVersion = 3;
 
 struct FiguresApi {
   int version = kFiguresApiVersion;
@@ -32,6 +33,18 @@ struct FiguresApi {
   std::string (*save_gap_fill)(const std::string& path, const std::string& title, const std::vector<double>& time_s,
                                const Eigen::Matrix3Xd& measured, const Eigen::Matrix3Xd& truth,
                                const std::vector<FillSeries>& fills, double gap_start_s, double gap_end_s) = nullptr;
+  // Version 3: the key-recognition and phasing figures (analysis_figures.h).
+  std::string (*save_gestural_score)(const std::string& path, const std::string& title, const std::vector<float>& audio,
+                                     double audio_rate_hz, double audio_start_s,
+                                     const std::vector<PosteriorLane>& lanes, double frame_rate_hz,
+                                     const std::vector<LabelTier>& tiers, double start_s, double end_s) = nullptr;
+  std::string (*save_histograms)(const std::string& path, const std::string& title,
+                                 const std::vector<HistogramPanel>& panels, double bin_ms,
+                                 const std::string& x_label) = nullptr;
+  std::string (*save_confusion_matrix)(const std::string& path, const std::string& title,
+                                       const std::vector<std::string>& labels,
+                                       const std::vector<std::vector<int>>& counts, const std::string& true_axis,
+                                       const std::string& recognised_axis) = nullptr;
 };
 
 }  // namespace csw::report

@@ -2,6 +2,7 @@
 // dlopen (workbench/jobs/figures.cc). Exceptions become error messages.
 #include <exception>
 
+#include "workbench/report/analysis_figures.h"
 #include "workbench/report/figures_api.h"
 #include "workbench/report/report.h"
 
@@ -48,10 +49,39 @@ std::string SaveGapFill(const std::string& path, const std::string& title, const
       [&] { csw::report::SaveGapFill(path, title, time_s, measured, truth, fills, gap_start_s, gap_end_s); });
 }
 
+std::string SaveGesturalScore(const std::string& path, const std::string& title, const std::vector<float>& audio,
+                              double audio_rate_hz, double audio_start_s,
+                              const std::vector<csw::report::PosteriorLane>& lanes, double frame_rate_hz,
+                              const std::vector<csw::LabelTier>& tiers, double start_s, double end_s) {
+  return Guarded([&] {
+    csw::report::SaveGesturalScore(path, title, audio, audio_rate_hz, audio_start_s, lanes, frame_rate_hz, tiers,
+                                   start_s, end_s);
+  });
+}
+
+std::string SaveHistograms(const std::string& path, const std::string& title,
+                           const std::vector<csw::report::HistogramPanel>& panels, double bin_ms,
+                           const std::string& x_label) {
+  return Guarded([&] { csw::report::SaveHistograms(path, title, panels, bin_ms, x_label); });
+}
+
+std::string SaveConfusionMatrix(const std::string& path, const std::string& title,
+                                const std::vector<std::string>& labels, const std::vector<std::vector<int>>& counts,
+                                const std::string& true_axis, const std::string& recognised_axis) {
+  return Guarded([&] { csw::report::SaveConfusionMatrix(path, title, labels, counts, true_axis, recognised_axis); });
+}
+
 }  // namespace
 
 extern "C" __attribute__((visibility("default"))) const csw::report::FiguresApi* csw_figures_api() {
-  static const csw::report::FiguresApi api{csw::report::kFiguresApiVersion, &SaveErrorBars, &SaveVarianceExplained,
-                                           &SaveParameterEffects,           &SaveGapMap,    &SaveGapFill};
+  static const csw::report::FiguresApi api{csw::report::kFiguresApiVersion,
+                                           &SaveErrorBars,
+                                           &SaveVarianceExplained,
+                                           &SaveParameterEffects,
+                                           &SaveGapMap,
+                                           &SaveGapFill,
+                                           &SaveGesturalScore,
+                                           &SaveHistograms,
+                                           &SaveConfusionMatrix};
   return &api;
 }
