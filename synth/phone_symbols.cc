@@ -279,7 +279,7 @@ MappedPhones MapPhoneTier(const LabelTier& tier, PhoneSymbols symbols, const std
           ipa.push_back(r.uncued);
           break;
         case SymbolReading::Kind::kUnknown:
-          ipa.push_back(tok);  // in neither LfPC table: transparent to CueKeys
+          ipa.push_back("?" + tok);  // in neither LfPC table whatever the symbol: transparent to CueKeys
           tally(unknown, tok, l.start_s, "");
           break;
       }
@@ -301,7 +301,11 @@ MappedPhones MapPhoneTier(const LabelTier& tier, PhoneSymbols symbols, const std
     }
     t = l.end_s;
   }
-  if (tier.end_s > t + eps) push("", t, tier.end_s);
+  if (tier.end_s > t + eps) {
+    push("", t, tier.end_s);
+  } else if (!out.phones.empty() && tier.end_s > out.phones.back().end_s) {
+    out.phones.back().end_s = tier.end_s;  // rounding of the last label's end
+  }
 
   const std::string set = PhoneSymbolsName(symbols);
   for (const auto& [sym, x] : unknown) {
@@ -321,10 +325,11 @@ LabelTier ExpectedKeysTier(const std::vector<Key>& keys, double start_s, double 
   tier.kind = LabelTier::Kind::kInterval;
   tier.start_s = start_s;
   tier.end_s = end_s;
+  const double eps = 1e-9;  // boundaries this close are one boundary
   double t = start_s;
   for (const Key& k : keys) {
-    const double a = std::max(k.a1_s, t);
-    const double b = std::min(k.end_s, end_s);
+    const double a = k.a1_s < t + eps ? t : k.a1_s;
+    const double b = k.end_s > end_s - eps ? end_s : k.end_s;
     if (!(b > a)) {
       if (k.type == KeyType::kRest) continue;
       // A cued key always gets an interval; one of zero length keeps its place.

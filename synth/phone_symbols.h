@@ -17,7 +17,8 @@
 //     a normal consonant and takes the next vowel, as in "les amis" l e z a m i);
 //   - a sound LfPC does not cue ([h], [ʔ]) -> an uncued phone, transparent to
 //     the rules, no warning;
-//   - an unknown symbol -> an uncued phone and one warning per symbol (never a throw);
+//   - an unknown symbol -> an uncued phone (ipa "?" + the symbol) and one warning per
+//     symbol (never a throw);
 //   - an ambiguous symbol (SPPAS "eu" = ə or ø, "U~" = ɛ̃ or œ̃, SAMPA archiphonemes
 //     "E/", "O/", "&/", "U~/") -> the documented reading and one warning per symbol.
 // Gaps between the intervals of a tier are pauses.
