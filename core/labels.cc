@@ -60,19 +60,34 @@ KeyCode ParseKeyCode(const std::string& text, const std::string& where, const st
 }
 
 std::vector<KeyMark> ReadKeyTier(const LabelTier& tier, const std::string& where) {
-  if (tier.kind != LabelTier::Kind::kPoint)
-    throw InvalidInput(Prefix(where) + "tier '" + tier.name + "' is an interval tier; key labels are a point tier");
+  const bool intervals = tier.kind == LabelTier::Kind::kInterval;
   std::vector<KeyMark> marks;
   marks.reserve(tier.labels.size());
   for (size_t i = 0; i < tier.labels.size(); ++i) {
     const Label& l = tier.labels[i];
-    if (!std::isfinite(l.start_s))
+    // An interval tier (ELAN has no point tiers): each labelled interval is a
+    // target at its midpoint; empty intervals are the gaps between them.
+    if (intervals && Trim(l.text).empty()) continue;
+    const double t = intervals ? 0.5 * (l.start_s + l.end_s) : l.start_s;
+    if (!std::isfinite(t))
       throw InvalidInput(Prefix(where) + "tier '" + tier.name + "': label " + std::to_string(i + 1) +
                          ": time is not finite");
-    marks.push_back({l.start_s, ParseKeyCode(l.text, where, tier.name, i, l.start_s)});
+    marks.push_back({t, ParseKeyCode(l.text, where, tier.name, i, t)});
   }
   std::stable_sort(marks.begin(), marks.end(), [](const KeyMark& a, const KeyMark& b) { return a.time_s < b.time_s; });
   return marks;
+}
+
+std::vector<ExpectedKey> ReadExpectedKeyTier(const LabelTier& tier, const std::string& where) {
+  if (tier.kind != LabelTier::Kind::kInterval)
+    throw InvalidInput(Prefix(where) + "tier '" + tier.name + "' is a point tier; expected keys are an interval tier");
+  std::vector<ExpectedKey> keys;
+  for (size_t i = 0; i < tier.labels.size(); ++i) {
+    const Label& l = tier.labels[i];
+    if (Trim(l.text).empty()) continue;  // a pause between keys
+    keys.push_back({l.start_s, l.end_s, ParseKeyCode(l.text, where, tier.name, i, l.start_s)});
+  }
+  return keys;
 }
 
 KeyTargets ReadKeyTargets(const std::vector<LabelTier>& tiers, const std::string& where, const KeyTierNames& names) {

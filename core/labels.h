@@ -48,10 +48,25 @@ struct KeyMark {
   KeyCode code;
 };
 
-// The marks of a point tier of key codes, in time order. Throws InvalidInput
-// (one error, for the first bad label, as ParseKeyCode) when a label is not a
-// key code, and when the tier is an interval tier or a time is not finite.
+// The marks of a point tier of key codes, in time order. An interval tier is
+// read too (ELAN has no point tiers; io/formats/eaf.h returns a point tier only
+// when every annotation has zero duration): each non-empty interval is one mark
+// at its midpoint, empty intervals are skipped. Throws InvalidInput (one error,
+// for the first bad label, as ParseKeyCode) when a label is not a key code or a
+// time is not finite.
 std::vector<KeyMark> ReadKeyTier(const LabelTier& tier, const std::string& where);
+
+// One key of an `expected_keys` interval tier (csw cue, synth/phone_symbols.h):
+// the key's span from its A1 to its end.
+struct ExpectedKey {
+  double start_s = 0.0;
+  double end_s = 0.0;
+  KeyCode code;
+};
+// The keys of an expected-keys interval tier in order, rests included; empty
+// intervals (pauses) are skipped. Throws InvalidInput for a point tier and as
+// ParseKeyCode for a bad label.
+std::vector<ExpectedKey> ReadExpectedKeyTier(const LabelTier& tier, const std::string& where);
 
 // A target of one component: the frame time and the class (shape 0-8 or
 // placement 0-5), with the full code it came from.

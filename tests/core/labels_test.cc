@@ -76,10 +76,45 @@ TEST(KeyCodes, BadLabelGivesOneClearError) {
   EXPECT_EQ(ErrorOf([&] { ReadKeyTier(t, "c.h5: take 's01'"); }),
             "c.h5: take 's01': tier 'keys': label 3 at 1.250 s: bad key code 'x7': not two digits (a key code is "
             "two digits PS: placement 0-5 then shape 0-8, 00 = rest)");
-  LabelTier intervals = t;
-  intervals.kind = LabelTier::Kind::kInterval;
-  EXPECT_EQ(ErrorOf([&] { ReadKeyTier(intervals, "f.TextGrid"); }),
-            "f.TextGrid: tier 'keys' is an interval tier; key labels are a point tier");
+}
+
+TEST(KeyCodes, IntervalTiersFromElanGiveMarksAtMidpoints) {
+  // ELAN annotations of one or two frames around each target; gaps are empty intervals.
+  LabelTier t{"keys",
+              LabelTier::Kind::kInterval,
+              0.0,
+              2.0,
+              {{0.0, 0.49, ""}, {0.49, 0.51, "00"}, {0.51, 1.0, ""}, {1.0, 1.2, "24"}, {1.2, 2.0, " "}}};
+  const std::vector<KeyMark> m = ReadKeyTier(t, "a.eaf");
+  ASSERT_EQ(m.size(), 2u);
+  EXPECT_DOUBLE_EQ(m[0].time_s, 0.5);
+  EXPECT_TRUE(m[0].code.IsRest());
+  EXPECT_DOUBLE_EQ(m[1].time_s, 1.1);
+  EXPECT_EQ(m[1].code, (KeyCode{2, 4}));
+  t.labels[3].text = "2 4";
+  EXPECT_EQ(ErrorOf([&] { ReadKeyTier(t, "a.eaf"); }),
+            "a.eaf: tier 'keys': label 4 at 1.100 s: bad key code '2 4': not two digits (a key code is two digits "
+            "PS: placement 0-5 then shape 0-8, 00 = rest)");
+}
+
+TEST(KeyCodes, ExpectedKeyTierReadsBackTheKeysWithTheirSpans) {
+  const LabelTier t{"expected_keys",
+                    LabelTier::Kind::kInterval,
+                    0.0,
+                    1.0,
+                    {{0.0, 0.1, "00"}, {0.1, 0.3, "34"}, {0.3, 0.4, ""}, {0.4, 0.5, "15"}, {0.5, 1.0, "00"}}};
+  const std::vector<ExpectedKey> k = ReadExpectedKeyTier(t, "c.h5: take 'a'");
+  ASSERT_EQ(k.size(), 4u);
+  EXPECT_EQ(k[1].code, (KeyCode{3, 4}));
+  EXPECT_DOUBLE_EQ(k[1].start_s, 0.1);
+  EXPECT_DOUBLE_EQ(k[1].end_s, 0.3);
+  EXPECT_EQ(k[2].code, (KeyCode{1, 5}));
+  EXPECT_DOUBLE_EQ(k[2].start_s, 0.4);
+  EXPECT_TRUE(k[3].code.IsRest());
+  LabelTier p = t;
+  p.kind = LabelTier::Kind::kPoint;
+  EXPECT_EQ(ErrorOf([&] { ReadExpectedKeyTier(p, "w"); }),
+            "w: tier 'expected_keys' is a point tier; expected keys are an interval tier");
 }
 
 TEST(KeyTargets, ShapeAtKeysPlacementAtItsOwnTierWhenPresent) {

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 
+#include "core/labels.h"
 #include "datasets/virtual_cuer.h"
 #include "io/corpus/corpus.h"
 #include "io/formats/textgrid.h"
@@ -274,6 +275,13 @@ TEST(CueJob, TextGridInCopyOutWithEveryTier) {
   EXPECT_NEAR(tiers[2].labels[1].start_s, 0.2, 1e-9);  // the pause [0.2, 0.3]
   EXPECT_NEAR(tiers[2].labels[1].end_s, 0.3, 1e-9);
   EXPECT_NEAR(tiers[2].labels[4].end_s, 0.8, 1e-9);
+  // The recogniser reads the tier back as keys with their spans (core/labels.h).
+  const std::vector<ExpectedKey> keys = ReadExpectedKeyTier(tiers[2], out);
+  ASSERT_EQ(keys.size(), 4u);
+  EXPECT_EQ(keys[0].code, (KeyCode{3, 6}));
+  EXPECT_EQ(keys[2].code, (KeyCode{1, 3}));
+  EXPECT_NEAR(keys[1].start_s, 0.3, 1e-9);
+  EXPECT_NEAR(keys[1].end_s, 0.5, 1e-9);
 }
 
 // The virtual cuer writes its phones (IPA, from espeak-ng) and a "keys" point
