@@ -601,5 +601,34 @@ TEST(Cli, C3dNanWithResidualIsMissingInInspectAndImport) {
   for (const auto& [fr, m] : patched) EXPECT_FALSE(back.markers.Visible(fr, m)) << fr << "," << m;
 }
 
+// csw cue on a lone TextGrid: usage errors exit 1, a missing phone tier exits 2
+// with one line naming the tiers present, and a good request writes the copy.
+TEST(Cli, CueTextGridExitCodesAndOutput) {
+  testing::TempDir dir;
+  // "bonjour" in SPPAS symbols, 0.1 s a phone: bo~ 34, Zu 41, R alone 13.
+  LabelTier phones{"PhonAlign", LabelTier::Kind::kInterval, 0.0, 0.5, {}};
+  const char* symbols[] = {"b", "o~", "Z", "u", "R"};
+  for (int i = 0; i < 5; ++i) phones.labels.push_back({0.1 * i, 0.1 * (i + 1), symbols[i]});
+  WriteTextGrid((dir / "a.TextGrid").string(), {phones}, 0.0, 0.5);
+  EXPECT_EQ(Csw("cue " + Q(dir / "a.TextGrid"), dir.path()).code, 1);
+  EXPECT_EQ(
+      Csw("cue " + Q(dir / "a.TextGrid") + " -o " + Q(dir / "b.TextGrid") + " --symbols arpabet", dir.path()).code, 1);
+  const RunResult missing = Csw("-q cue " + Q(dir / "a.TextGrid") + " -o " + Q(dir / "b.TextGrid"), dir.path());
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_EQ(missing.err,
+            (dir / "a.TextGrid").string() + ": no phone tier 'phones' (tiers: 'PhonAlign'); name it with --phones\n");
+  EXPECT_FALSE(fs::exists(dir / "b.TextGrid"));
+  const RunResult ok = Csw(
+      "-q cue --json " + Q(dir / "a.TextGrid") + " -o " + Q(dir / "b.TextGrid") + " --phones PhonAlign", dir.path());
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  EXPECT_EQ(json::parse(ok.out)["takes"][0]["sequence"], "00 34 41 13 00");
+  const std::vector<LabelTier> tiers = ReadTextGrid((dir / "b.TextGrid").string());
+  ASSERT_EQ(tiers.size(), 2u);
+  EXPECT_EQ(tiers[1].name, "expected_keys");
+  ASSERT_EQ(tiers[1].labels.size(), 3u);
+  EXPECT_EQ(tiers[1].labels[0].text, "34");
+  EXPECT_EQ(tiers[1].labels[2].text, "13");
+}
+
 }  // namespace
 }  // namespace csw

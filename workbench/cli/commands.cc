@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "workbench/jobs/clean_job.h"
+#include "workbench/jobs/cue_job.h"
 #include "workbench/jobs/jobs.h"
 #include "workbench/jobs/model_jobs.h"
 
@@ -330,6 +331,41 @@ class CleanCommand : public Command {
   bool json_ = false;
 };
 
+class CueCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("cue",
+                              "Expected Cued Speech keys of a phone alignment (IPA, X-SAMPA, SPPAS or MFA symbols): "
+                              "an interval tier 'expected_keys' written into each take of a corpus, or into a copy "
+                              "of a TextGrid (docs/phonetics.md)");
+    sub_->add_option("input", options_.input, "Corpus (.h5) or TextGrid")->required();
+    sub_->add_option("-o,--output", options_.output, "TextGrid input: the TextGrid to write");
+    sub_->add_option("--takes", options_.takes,
+                     "Corpus: takes, comma-separated names or glob patterns (docs/cli.md); default every take but "
+                     "fill versions");
+    sub_->add_option("--phones", options_.phones, "The phone tier")->capture_default_str();
+    sub_->add_option("--symbols", options_.symbols, "Phone symbols: auto, ipa, mfa (= ipa), xsampa or sppas")
+        ->capture_default_str();
+    sub_->add_option("--tier", options_.tier, "Name of the tier written")->capture_default_str();
+    sub_->add_flag("--dry-run", options_.dry_run, "Report only: write nothing");
+    sub_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::Cue(options_, progress);
+    if (json_) {
+      PrintJson(r);
+    } else {
+      std::cout << jobs::CueText(r);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::CueOptions options_;
+  bool json_ = false;
+};
+
 class PackCommand : public Command {
  public:
   void Register(CLI::App& app) override {
@@ -389,6 +425,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<FitCommand>());
   c.push_back(std::make_unique<InvertCommand>());
   c.push_back(std::make_unique<CleanCommand>());
+  c.push_back(std::make_unique<CueCommand>());
   c.push_back(std::make_unique<PackCommand>());
   c.push_back(std::make_unique<UpgradeCommand>());
   return c;
