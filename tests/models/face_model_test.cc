@@ -363,9 +363,12 @@ TEST(FaceModel, UnsolvableFramesAreNaN) {
         << f;
     EXPECT_EQ(r.converged[i] != 0, r.status[i] == FrameStatus::kConverged) << f;
     EXPECT_EQ(r.cold_retry[i], 0) << f;  // the face never retries
-    if (!r.solved[i]) EXPECT_EQ(r.iterations[i], 0) << f;
+    if (!r.solved[i]) {
+      EXPECT_EQ(r.iterations[i], 0) << f;
+      continue;
+    }
     // Cold: the first frame and the frames after an unsolved one; warm otherwise.
-    if (r.solved[i]) EXPECT_EQ(r.cold_start[i], (f == 0 || f == 4 || f == 8) ? 1 : 0) << f;
+    EXPECT_EQ(r.cold_start[i], (f == 0 || f == 4 || f == 8) ? 1 : 0) << f;
   }
   EXPECT_GE(r.iterations[4], 1);  // a cold start is not at the optimum
   // Every frame NaN: nothing solved, no throw.
