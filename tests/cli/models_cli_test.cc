@@ -645,13 +645,15 @@ TEST(CliModels, FramesCsvAndWorstFramesFindKnownBadFrames) {
   ASSERT_TRUE(std::getline(f, line));
   EXPECT_EQ(line,
             "take,frame,time_s,model,cluster_visible,shape_visible,mean_error_mm,max_error_mm,max_error_marker,"
-            "status,iterations,start,cold_retry");
+            "status,iterations,start,cold_retry,hidden,hidden_mean_mm,hidden_max_mm");
   std::map<int64_t, std::vector<std::string>> rows;
   while (std::getline(f, line)) {
     const std::vector<std::string> r = CsvFields(line);
-    ASSERT_EQ(r.size(), 13u) << line;
+    ASSERT_EQ(r.size(), 16u) << line;
     EXPECT_EQ(r[0], "bumped");
     EXPECT_EQ(r[3], "face");
+    EXPECT_EQ(r[13], "0");  // nothing hidden without --hide
+    EXPECT_EQ(r[15], "");
     rows[std::stoll(r[1])] = r;
   }
   ASSERT_EQ(static_cast<int64_t>(rows.size()), take.frames());
@@ -695,6 +697,35 @@ TEST(CliModels, FramesCsvAndWorstFramesFindKnownBadFrames) {
     EXPECT_EQ(row[11], "cold") << frame;
     break;
   }
+
+  // With --hide: the frames' hidden samples add up to the take's, and the
+  // largest per-frame hidden error is the take's maximum.
+  const fs::path hidden_csv = dir / "hidden.csv";
+  const json hid = RunJson(
+      "invert " + Q(corpus) + " --models " + Q(models) + " --takes bumped --hide 0.1 --frames-csv " + Q(hidden_csv),
+      dir.path());
+  ASSERT_TRUE(hid.contains("face"));
+  std::ifstream hf(hidden_csv);
+  ASSERT_TRUE(std::getline(hf, line));
+  int64_t hidden_total = 0;
+  double hidden_max = 0, hidden_sum = 0;
+  while (std::getline(hf, line)) {
+    const std::vector<std::string> h = CsvFields(line);
+    ASSERT_EQ(h.size(), 16u) << line;
+    const int n = std::stoi(h[13]);
+    hidden_total += n;
+    if (n == 0) {
+      EXPECT_EQ(h[15], "") << line;
+      continue;
+    }
+    hidden_max = std::max(hidden_max, std::stod(h[15]));
+    hidden_sum += n * std::stod(h[14]);
+  }
+  const json& take_hidden = hid["face"]["takes"][0]["hidden"];
+  EXPECT_EQ(hidden_total, take_hidden["count"].get<int64_t>());
+  EXPECT_GT(hidden_total, 0);
+  EXPECT_NEAR(hidden_max, take_hidden["max_mm"].get<double>(), 1e-4);
+  EXPECT_NEAR(hidden_sum / static_cast<double>(hidden_total), take_hidden["mean_mm"].get<double>(), 1e-4);
 
   // Text: percentiles and the worst frames.
   const RunResult text =

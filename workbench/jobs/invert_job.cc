@@ -72,6 +72,8 @@ struct TakeJob {
   std::vector<FrameReport> frames;  // per frame of the range
 };
 
+double Distance(const float* a, const float* b);
+
 // The per-frame report of one inverted (model, take) pair, from the solve's
 // per-frame results and errors.
 std::vector<FrameReport> MakeFrameReports(const TakeJob& job) {
@@ -104,6 +106,18 @@ std::vector<FrameReport> MakeFrameReports(const TakeJob& job) {
     r.iterations = res.iterations[fi];
     r.cold_start = res.cold_start[fi] != 0;
     r.cold_retry = res.cold_retry[fi] != 0;
+    r.hidden_mean_mm = r.hidden_max_mm = std::nan("");
+  }
+  std::vector<ErrorStats> hidden(out.size());
+  for (const auto& [f, c] : job.hidden) {
+    const float* rec = res.reconstructed.at(f, c);
+    if (!IsMissing(rec[0])) hidden[static_cast<size_t>(f)].Add(Distance(rec, job.original.at(f, c)));
+  }
+  for (size_t f = 0; f < out.size(); ++f) {
+    if (hidden[f].count == 0) continue;
+    out[f].hidden = static_cast<int>(hidden[f].count);
+    out[f].hidden_mean_mm = hidden[f].mean;
+    out[f].hidden_max_mm = hidden[f].max;
   }
   return out;
 }
@@ -455,7 +469,7 @@ std::string Number(double v, const char* format) {
 
 std::string FrameCsvHeader() {
   return "take,frame,time_s,model,cluster_visible,shape_visible,mean_error_mm,max_error_mm,max_error_marker,"
-         "status,iterations,start,cold_retry";
+         "status,iterations,start,cold_retry,hidden,hidden_mean_mm,hidden_max_mm";
 }
 
 std::string FrameCsvRow(const FrameReport& r) {
@@ -466,6 +480,7 @@ std::string FrameCsvRow(const FrameReport& r) {
   const bool solved = r.status == FrameStatus::kConverged || r.status == FrameStatus::kMaxIterations;
   s += solved ? (r.cold_start ? "cold" : "warm") : "";
   s += r.cold_retry ? ",yes" : ",no";
+  s += "," + std::to_string(r.hidden) + "," + Number(r.hidden_mean_mm, "%.4f") + "," + Number(r.hidden_max_mm, "%.4f");
   return s;
 }
 
@@ -485,6 +500,11 @@ json FrameJson(const FrameReport& r) {
     j["mean_error_mm"] = r.mean_error_mm;
     j["max_error_mm"] = r.max_error_mm;
     j["max_error_marker"] = r.max_marker;
+  }
+  if (r.hidden > 0) {
+    j["hidden"] = r.hidden;
+    j["hidden_mean_mm"] = r.hidden_mean_mm;
+    j["hidden_max_mm"] = r.hidden_max_mm;
   }
   return j;
 }

@@ -59,6 +59,11 @@ struct FrameReport {
   int iterations = 0;       // solver iterations of the kept solve
   bool cold_start = false;  // the kept solve started cold
   bool cold_retry = false;  // a warm start was retried from a cold start
+  // Samples hidden on purpose (--hide) in this frame and their reconstruction
+  // errors (the per-take "hidden" statistics); 0 and NaN without --hide.
+  int hidden = 0;
+  double hidden_mean_mm = 0;
+  double hidden_max_mm = 0;
 };
 
 // The CSV header and one row (no newline) of FrameReport, RFC 4180 quoting.
