@@ -351,18 +351,16 @@ json Score(const ModelRun& run, const std::vector<std::unique_ptr<TakeJob>>& job
   return m;
 }
 
-// Every frame of every job: take (selection order), frame, model.
-void WriteFramesCsv(const std::vector<std::unique_ptr<TakeJob>>& jobs, const std::string& path) {
+// Every frame of every job: take (selection order), frame, model. LoadJobs
+// makes the jobs take by take, one per model (`models` of them) in run order.
+void WriteFramesCsv(const std::vector<std::unique_ptr<TakeJob>>& jobs, size_t models, const std::string& path) {
   std::ofstream out(path);
   if (!out) throw IoError(path, "cannot open for writing");
   out << FrameCsvHeader() << "\n";
-  for (size_t a = 0; a < jobs.size();) {
-    size_t b = a;  // jobs [a, b) are the models of one take range
-    while (b < jobs.size() && jobs[b]->range.spec == jobs[a]->range.spec) ++b;
+  for (size_t a = 0; a + models <= jobs.size(); a += models) {
     for (size_t f = 0; f < jobs[a]->frames.size(); ++f) {
-      for (size_t j = a; j < b; ++j) out << FrameCsvRow(jobs[j]->frames[f]) << "\n";
+      for (size_t j = a; j < a + models; ++j) out << FrameCsvRow(jobs[j]->frames[f]) << "\n";
     }
-    a = b;
   }
   out.close();
   if (!out) throw IoError(path, "write failed");
@@ -442,7 +440,7 @@ json Invert(const InvertOptions& options, Progress& progress) {
     summary[run->kind] = std::move(scores);
   }
   if (!options.frames_csv.empty()) {
-    WriteFramesCsv(jobs, options.frames_csv);
+    WriteFramesCsv(jobs, runs.size(), options.frames_csv);
     summary["frames_csv"] = options.frames_csv;
   }
   if (options.fill) summary["filled"] = WriteFilled(corpus, ranges, jobs, options, progress);
