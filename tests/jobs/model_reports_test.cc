@@ -169,6 +169,17 @@ TEST(ModelReports, InvertTextPercentilesAndWorstFrames) {
   face["training"] = {{"visible", json{{"count", 0}}}};
   face["held_out"] = {{"visible", visible}};
   face["overall"] = {{"visible", visible}};
+  // Ranked by p99.9 among shape markers; cluster markers and markers without samples are left out.
+  auto marker = [](const std::string& name, const std::string& role, double p999) {
+    json v = Stats(10, 0.3, 0.1, p999 + 0.5);
+    v["p99_mm"] = p999 - 0.5;
+    v["p99_9_mm"] = p999;
+    return json{{"marker", name}, {"role", role}, {"visible", v}};
+  };
+  face["markers"] = {
+      marker("NAS", "cluster", 9.0), marker("LIP1", "shape", 1.5),
+      marker("TH2", "shape", 2.5),   marker("JAW", "shape", 0.5),
+      marker("TH1", "shape", 2.0),   {{"marker", "TH9"}, {"role", "shape"}, {"visible", json{{"count", 0}}}}};
   face["worst_frames"] = {{{"take", "s1"},
                            {"frame", 42},
                            {"time_s", 0.42},
@@ -194,6 +205,7 @@ TEST(ModelReports, InvertTextPercentilesAndWorstFrames) {
             "face (target 1.000 mm):\n"
             "  s1 [held_out] 99/100 frames, visible 0.320 ± 0.100 mm (p99 1.250, p99.9 2.500, max 3.500, n=900)\n"
             "  held_out: visible 0.320 ± 0.100 mm (p99 1.250, p99.9 2.500, max 3.500, n=900)\n"
+            "  largest p99.9 visible: TH2 2.500 mm, TH1 2.000 mm, LIP1 1.500 mm\n"
             "  worst frames: s1 frame 42 (0.420 s): max 3.500 mm at TH2, mean 0.750 mm, converged, 7 iterations\n"
             "                s1 frame 3 (0.030 s): max 2.000 mm at LIP1, mean 0.500 mm, max_iterations, 30 "
             "iterations, cold retry\n");

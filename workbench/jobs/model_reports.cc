@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 namespace csw::jobs {
 
@@ -127,6 +129,23 @@ std::string InvertText(const json& s) {
       if (p["rotation_deg"].value("count", 0) > 0) {
         o << "  pose vs truth: " << p["rotation_deg"]["mean_deg"].get<double>() << "° and "
           << p["translation_mm"]["mean_mm"].get<double>() << " mm on average\n";
+      }
+    }
+    // The 3 shape markers with the largest 99.9th percentile, visible and hidden.
+    if (m.contains("markers")) {
+      for (const char* which : {"visible", "hidden"}) {
+        std::vector<std::pair<double, std::string>> ranked;
+        for (const auto& e : m["markers"]) {
+          if (e.value("role", "") != "shape" || !e.contains(which) || !e[which].contains("p99_9_mm")) continue;
+          ranked.emplace_back(e[which]["p99_9_mm"].get<double>(), e["marker"].get<std::string>());
+        }
+        if (ranked.empty()) continue;
+        std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+        o << "  largest p99.9 " << which << ":";
+        for (size_t i = 0; i < std::min<size_t>(ranked.size(), 3); ++i) {
+          o << (i ? ", " : " ") << ranked[i].second << " " << ranked[i].first << " mm";
+        }
+        o << "\n";
       }
     }
     if (m.contains("worst_frames")) {

@@ -18,8 +18,9 @@ nlohmann::json StatsJson(const ErrorSamples& samples, const std::string& unit = 
 std::string FitText(const nlohmann::json& summary);
 
 // Text of `csw invert` from Invert's JSON (invert_job.h): per model, one line per
-// take, one per role (training, held-out), pose errors, the worst frames (up
-// to 5 of the JSON's list); then filled takes. Statistics read
+// take, one per role (training, held-out), pose errors, the 3 shape markers
+// with the largest 99.9th percentile (visible, and hidden with --hide), the
+// worst frames (up to 5 of the JSON's list); then filled takes. Statistics read
 // "mean ± sd mm (p99 …, p99.9 …, max …, n=…)", the percentiles when present.
 std::string InvertText(const nlohmann::json& summary);
 
