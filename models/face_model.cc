@@ -479,9 +479,10 @@ void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray
     }
     if (vis_head < std::max(3, options.min_cluster_markers) || vis_shape < std::max(1, options.min_shape_markers)) {
       have_prev = false;
-      continue;
+      continue;  // status kTooFewMarkers
     }
-    if (!(options.warm_start && have_prev)) {
+    const bool cold = !(options.warm_start && have_prev);
+    if (cold) {
       // Cold start: Kabsch on the head cluster, then the shape parameters
       // from the visible shape markers taken to the head frame.
       for (int k = 0; k < nh; ++k) {
@@ -493,6 +494,7 @@ void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray
       }
       const RigidFit fit = EstimateRigidKabsch(prep.reference, head_obs);
       if (!fit.valid) {
+        out.status[static_cast<size_t>(f)] = FrameStatus::kNoStart;
         have_prev = false;
         continue;
       }
@@ -519,6 +521,7 @@ void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray
     pose.translation = problem.t0 + x.template segment<3>(3);
     const Eigen::VectorXd p = x.tail(np);
     if (!pose.rotation.allFinite() || !pose.translation.allFinite() || !p.allFinite()) {
+      out.status[static_cast<size_t>(f)] = FrameStatus::kFailed;
       have_prev = false;
       continue;
     }
@@ -530,6 +533,10 @@ void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray
     out.solved[static_cast<size_t>(f)] = 1;
     out.converged[static_cast<size_t>(f)] =
         summary.status != ceres::TinySolver<FrameProblem<N>>::HIT_MAX_ITERATIONS ? 1 : 0;
+    out.status[static_cast<size_t>(f)] =
+        out.converged[static_cast<size_t>(f)] ? FrameStatus::kConverged : FrameStatus::kMaxIterations;
+    out.iterations[static_cast<size_t>(f)] = summary.iterations;
+    out.cold_start[static_cast<size_t>(f)] = cold ? 1 : 0;
     out.pose.row(f) = pose.Parameters().transpose();
     out.params.row(f) = p.transpose();
 
@@ -604,8 +611,7 @@ InversionResult InvertFace(const FaceModel& model, const MarkerArray& take, cons
   out.params = Eigen::MatrixXd::Constant(frames, np, kNaN);
   out.reconstructed = MarkerArray(frames, nm);
   out.error_mm = Eigen::MatrixXd::Constant(frames, nm, kNaN);
-  out.solved.assign(static_cast<size_t>(frames), 0);
-  out.converged.assign(static_cast<size_t>(frames), 0);
+  out.ResizeFrames(frames);
 
   // Dynamic sizes: fixed-size instances for 1-10 parameters cost 4 minutes of
   // compilation and measured no faster (bench_face_inversion, CPU time).

@@ -708,8 +708,7 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
   out.params.setConstant(frames, p, kNaN);
   out.reconstructed = MarkerArray(frames, nm);
   out.error_mm.setConstant(frames, nm, kNaN);
-  out.solved.assign(static_cast<size_t>(frames), 0);
-  out.converged.assign(static_cast<size_t>(frames), 0);
+  out.ResizeFrames(frames);
 
   const Kernel kernel(model, options.prior_mm);
   Workspace w;
@@ -763,8 +762,9 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
     }
     if (vis_f < options.min_cluster_markers || vis_f < 3 || vis_h < options.min_shape_markers) {
       have_prev = false;
-      continue;
+      continue;  // status kTooFewMarkers
     }
+    int iterations = 0;  // of the last solve
     // One solve from the current start (w.r0, w.t0, q); returns the final cost.
     auto solve = [&](Eigen::VectorXd* xx, bool* conv) {
       xx->head<6>().setZero();
@@ -774,6 +774,7 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
       solver.options.function_tolerance = 1e-7 * cost0 + 1e-14;
       const auto& summary = solver.Solve(residual, xx);
       *conv = summary.status != ceres::TinySolver<HandResidual>::HIT_MAX_ITERATIONS;
+      iterations = summary.iterations;
       residual(xx->data(), res0.data(), nullptr);
       return xx->allFinite() ? 0.5 * res0.squaredNorm() : std::numeric_limits<double>::infinity();
     };
@@ -791,14 +792,18 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
     bool conv = false;
     double cost = 0;
     const bool warm = options.warm_start && have_prev;
+    bool kept_cold = !warm, retried = false;
+    int kept_iterations = 0;
     if (warm) {
       w.r0 = r_prev;
       w.t0 = t_prev;
       cost = solve(&x, &conv);
+      kept_iterations = iterations;
       // A warm start that ends far worse than the model's usual fit (a jump
       // in the data, a wrong local minimum): try a cold start, keep the better.
       const double rms = std::sqrt(2 * cost / std::max(1, vis_f + vis_h));
       if (!(rms <= retry_rms_mm)) {
+        retried = true;
         const Eigen::Matrix3d r_warm = w.r0;
         const Eigen::Vector3d t_warm = w.t0;
         const Eigen::VectorXd q_warm = q;
@@ -809,6 +814,8 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
           x = x2;
           cost = cost2;
           conv = conv2;
+          kept_cold = true;
+          kept_iterations = iterations;
         } else {
           w.r0 = r_warm;
           w.t0 = t_warm;
@@ -817,12 +824,16 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
       }
     } else {
       if (!cold_start()) {
+        out.status[static_cast<size_t>(f)] = FrameStatus::kNoStart;
         have_prev = false;
         continue;
       }
       cost = solve(&x, &conv);
+      kept_iterations = iterations;
     }
+    out.cold_retry[static_cast<size_t>(f)] = retried ? 1 : 0;
     if (!x.allFinite() || !std::isfinite(cost)) {
+      out.status[static_cast<size_t>(f)] = FrameStatus::kFailed;
       have_prev = false;
       continue;
     }
@@ -840,6 +851,9 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
     out.params.row(f) = q.cwiseProduct(model.param_scale).transpose();
     out.solved[static_cast<size_t>(f)] = 1;
     out.converged[static_cast<size_t>(f)] = conv ? 1 : 0;
+    out.status[static_cast<size_t>(f)] = conv ? FrameStatus::kConverged : FrameStatus::kMaxIterations;
+    out.iterations[static_cast<size_t>(f)] = kept_iterations;
+    out.cold_start[static_cast<size_t>(f)] = kept_cold ? 1 : 0;
     LocalCoordinates(kernel, q.data(), &w);
     for (int j = 0; j < nm; ++j) {
       const Eigen::Vector3d lab = j < nf ? Eigen::Vector3d(r * kernel.reference.col(j) + t)

@@ -40,6 +40,59 @@ void ErrorStats::Merge(const ErrorStats& o) {
   sd = SampleSd(m2, count);
 }
 
+const char* FrameStatusName(FrameStatus status) {
+  switch (status) {
+    case FrameStatus::kTooFewMarkers:
+      return "too_few_markers";
+    case FrameStatus::kNoStart:
+      return "no_start";
+    case FrameStatus::kFailed:
+      return "failed";
+    case FrameStatus::kConverged:
+      return "converged";
+    case FrameStatus::kMaxIterations:
+      return "max_iterations";
+  }
+  return "unknown";
+}
+
+void InversionResult::ResizeFrames(int64_t frames) {
+  const size_t n = static_cast<size_t>(frames);
+  solved.assign(n, 0);
+  converged.assign(n, 0);
+  status.assign(n, FrameStatus::kTooFewMarkers);
+  iterations.assign(n, 0);
+  cold_start.assign(n, 0);
+  cold_retry.assign(n, 0);
+}
+
+void ErrorSamples::Add(double x) {
+  if (!std::isfinite(x)) return;
+  stats.Add(x);
+  values.push_back(x);
+}
+
+void ErrorSamples::Merge(const ErrorSamples& o) {
+  stats.Merge(o.stats);
+  values.insert(values.end(), o.values.begin(), o.values.end());
+}
+
+double ErrorSamples::Percentile(double percent) const { return csw::Percentile(values, percent); }
+
+double Percentile(std::vector<double> values, double percent) {
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
+  if (values.empty() || !(percent >= 0 && percent <= 100)) return std::nan("");
+  const double h = static_cast<double>(values.size() - 1) * percent / 100.0;
+  const size_t lo = std::min(values.size() - 1, static_cast<size_t>(std::floor(h)));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(lo), values.end());
+  const double a = values[lo];
+  const double frac = h - static_cast<double>(lo);
+  if (frac <= 0 || lo + 1 >= values.size()) return a;
+  // The next order statistic: the smallest value after position lo.
+  const double b = *std::min_element(values.begin() + static_cast<std::ptrdiff_t>(lo) + 1, values.end());
+  return a + frac * (b - a);
+}
+
 ErrorStats SummariseErrors(const Eigen::MatrixXd& error_mm, const std::vector<int>& columns, int64_t first,
                            int64_t count) {
   const int64_t rows = error_mm.rows();

@@ -36,6 +36,18 @@ struct InversionOptions {
   int min_shape_markers = 3;
 };
 
+// How one frame's solve ended (InversionResult::status).
+enum class FrameStatus : uint8_t {
+  kTooFewMarkers = 0,  // fewer visible cluster or shape markers than the options ask: not solved
+  kNoStart,            // the cold start failed (the cluster's Kabsch fit was degenerate): not solved
+  kFailed,             // the solve ended with non-finite values: not solved
+  kConverged,          // solved; the solver stopped on a tolerance before its iteration limit
+  kMaxIterations,      // solved; the solver hit its iteration limit
+};
+
+// "too_few_markers", "no_start", "failed", "converged", "max_iterations".
+const char* FrameStatusName(FrameStatus status);
+
 struct InversionResult {
   Eigen::MatrixXd pose;       // frames × 6: rx ry rz (rad) tx ty tz (mm), cluster frame → lab; NaN when unsolved
   Eigen::MatrixXd params;     // frames × P shape parameters; NaN when unsolved
@@ -45,6 +57,22 @@ struct InversionResult {
   Eigen::MatrixXd error_mm;
   std::vector<uint8_t> solved;     // frames
   std::vector<uint8_t> converged;  // frames: the solver reported convergence
+  // Per frame, how the solve went (filled by InvertFace and InvertHand):
+  std::vector<FrameStatus> status;  // frames; solved ⇔ kConverged or kMaxIterations
+  // Levenberg-Marquardt iterations of the kept solve, as ceres::TinySolver
+  // counts them (Summary::iterations: 0 when the start already met a
+  // tolerance); 0 when not solved.
+  std::vector<int32_t> iterations;
+  // The kept solve started cold (cluster Kabsch + shape from the visible
+  // markers) rather than from the previous frame: first frame, after an
+  // unsolved frame, without warm_start, or a cold retry that won.
+  std::vector<uint8_t> cold_start;
+  // A warm start ended above the model's retry threshold and the frame was
+  // solved again from a cold start, keeping the better (hand only; the face
+  // never retries).
+  std::vector<uint8_t> cold_retry;
+  // Sizes every per-frame vector (status kTooFewMarkers, all else 0).
+  void ResizeFrames(int64_t frames);
   int64_t frames() const { return static_cast<int64_t>(solved.size()); }
 };
 
@@ -63,6 +91,24 @@ struct ErrorStats {
   void Add(double x);
   void Merge(const ErrorStats& other);
 };
+
+// Absolute errors kept whole, for exact percentiles, with their ErrorStats.
+// Merge appends, so pooled percentiles are those of all the samples.
+struct ErrorSamples {
+  ErrorStats stats;
+  std::vector<double> values;  // finite samples, in the order added
+
+  void Add(double x);
+  void Merge(const ErrorSamples& other);
+  // Percentile (0..100) by linear interpolation between closest ranks: with
+  // the n samples sorted, x[0..n-1], h = (n − 1)·percent/100 and the result
+  // x[⌊h⌋] + (h − ⌊h⌋)·(x[⌊h⌋+1] − x[⌊h⌋]) (numpy's default, Hyndman & Fan
+  // type 7); 0 = min, 100 = max. NaN when empty.
+  double Percentile(double percent) const;
+};
+
+// The same percentile of any list of values (non-finite ones ignored).
+double Percentile(std::vector<double> values, double percent);
 
 // Statistics of the finite entries of error_mm restricted to the given columns
 // (empty = all columns) and rows [first, first + count) (count < 0 = to the end).

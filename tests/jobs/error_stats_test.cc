@@ -2,6 +2,7 @@
 // the model jobs, against values computed by hand and two-pass formulas.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -97,6 +98,63 @@ TEST(ErrorStats, SummariseErrorsUsesTheSameStatistics) {
   EXPECT_DOUBLE_EQ(s.mean, 19.0 / 5.0);
   EXPECT_DOUBLE_EQ(s.sd, direct.sd);
   EXPECT_DOUBLE_EQ(s.max, 6.0);
+}
+
+// Percentiles by linear interpolation between closest ranks (h = (n − 1)·q):
+// values worked out by hand.
+TEST(ErrorSamples, PercentilesOfKnownValues) {
+  ErrorSamples s;
+  EXPECT_TRUE(std::isnan(s.Percentile(99)));  // no samples
+  // 1 … 100 in a scrambled order: x[k] = k + 1.
+  for (int i = 0; i < 100; ++i) s.Add(static_cast<double>((i * 37) % 100 + 1));
+  EXPECT_EQ(s.stats.count, 100);
+  EXPECT_DOUBLE_EQ(s.stats.mean, 50.5);
+  EXPECT_DOUBLE_EQ(s.Percentile(0), 1.0);
+  EXPECT_DOUBLE_EQ(s.Percentile(100), 100.0);
+  EXPECT_NEAR(s.Percentile(50), 50.5, 1e-12);      // h = 49.5: halfway between 50 and 51
+  EXPECT_NEAR(s.Percentile(99), 99.01, 1e-12);     // h = 98.01: 99 + 0.01
+  EXPECT_NEAR(s.Percentile(99.9), 99.901, 1e-12);  // h = 98.901: 99 + 0.901
+  // Three samples: h = 2 × 0.99 = 1.98 between 2 and 10: 2 + 0.98 × 8 = 9.84.
+  ErrorSamples t;
+  for (double v : {10.0, 1.0, 2.0}) t.Add(v);
+  EXPECT_NEAR(t.Percentile(99), 9.84, 1e-12);
+  EXPECT_NEAR(t.Percentile(99.9), 2 + 0.998 * 8, 1e-12);
+  EXPECT_DOUBLE_EQ(t.Percentile(50), 2.0);
+  // One sample: every percentile is it; non-finite samples are ignored.
+  ErrorSamples one;
+  one.Add(std::nan(""));
+  one.Add(INFINITY);
+  one.Add(0.25);
+  EXPECT_EQ(one.values.size(), 1u);
+  EXPECT_DOUBLE_EQ(one.Percentile(99.9), 0.25);
+  EXPECT_DOUBLE_EQ(Percentile({std::nan(""), 4.0, 2.0}, 50), 3.0);
+  EXPECT_TRUE(std::isnan(Percentile({1.0}, 101)));
+}
+
+TEST(ErrorSamples, MergedPercentilesAreThoseOfAllSamples) {
+  std::mt19937_64 rng(5);
+  std::lognormal_distribution<double> dist(0.0, 1.0);
+  std::vector<double> x(2001);
+  for (double& v : x) v = dist(rng);
+  ErrorSamples a, b, whole;
+  for (size_t i = 0; i < x.size(); ++i) {
+    whole.Add(x[i]);
+    (i % 3 == 0 ? a : b).Add(x[i]);
+  }
+  a.Merge(b);
+  EXPECT_EQ(a.stats.count, 2001);
+  EXPECT_NEAR(a.stats.mean, whole.stats.mean, 1e-12);
+  EXPECT_EQ(a.stats.max, whole.stats.max);
+  // Reference: a full sort, 2001 samples: h = 2000 × 0.99 = 1980 exactly, and
+  // 2000 × 0.999 = 1998 exactly: order statistics, no interpolation.
+  std::vector<double> sorted = x;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_NEAR(a.Percentile(99), sorted[1980], 1e-9);
+  EXPECT_NEAR(a.Percentile(99.9), sorted[1998], 1e-9);
+  EXPECT_DOUBLE_EQ(a.Percentile(100), whole.stats.max);
+  // Between ranks: h = 2000 × 0.995 = 1990 and 2000 × 0.9995 = 1999.
+  EXPECT_NEAR(a.Percentile(99.95), sorted[1999], 1e-9);
+  EXPECT_NEAR(a.Percentile(99.975), 0.5 * (sorted[1999] + sorted[2000]), 1e-9);
 }
 
 }  // namespace

@@ -144,5 +144,72 @@ TEST(ModelReports, InvertTextWithTruthHiddenAndFill) {
             "figure: fig/face_errors.png\n");
 }
 
+TEST(ModelReports, StatsJsonOfSamplesHasExactPercentiles) {
+  ErrorSamples s;
+  for (double v : {4.0, 1.0, 2.0, 3.0, 10.0}) s.Add(v);
+  const json j = StatsJson(s);
+  EXPECT_EQ(j["count"], 5);
+  EXPECT_DOUBLE_EQ(j["mean_mm"].get<double>(), 4.0);
+  EXPECT_DOUBLE_EQ(j["max_mm"].get<double>(), 10.0);
+  // Sorted 1 2 3 4 10; h = 4 × 0.99 = 3.96: 4 + 0.96 × 6 = 9.76; h = 3.996: 4 + 0.996 × 6 = 9.976.
+  EXPECT_NEAR(j["p99_mm"].get<double>(), 9.76, 1e-12);
+  EXPECT_NEAR(j["p99_9_mm"].get<double>(), 9.976, 1e-12);
+  EXPECT_NEAR(StatsJson(s, "deg")["p99_deg"].get<double>(), 9.76, 1e-12);
+  EXPECT_EQ(StatsJson(ErrorSamples{}), json({{"count", 0}}));
+}
+
+TEST(ModelReports, InvertTextPercentilesAndWorstFrames) {
+  json visible = Stats(900, 0.32, 0.1, 3.5);
+  visible["p99_mm"] = 1.25;
+  visible["p99_9_mm"] = 2.5;
+  json face;
+  face["target_mm"] = 1.0;
+  face["takes"] = {
+      {{"take", "s1"}, {"role", "held_out"}, {"solved_frames", 99}, {"frames", 100}, {"visible", visible}}};
+  face["training"] = {{"visible", json{{"count", 0}}}};
+  face["held_out"] = {{"visible", visible}};
+  face["overall"] = {{"visible", visible}};
+  // Ranked by p99.9 among shape markers; cluster markers and markers without samples are left out.
+  auto marker = [](const std::string& name, const std::string& role, double p999) {
+    json v = Stats(10, 0.3, 0.1, p999 + 0.5);
+    v["p99_mm"] = p999 - 0.5;
+    v["p99_9_mm"] = p999;
+    return json{{"marker", name}, {"role", role}, {"visible", v}};
+  };
+  face["markers"] = {
+      marker("NAS", "cluster", 9.0), marker("LIP1", "shape", 1.5),
+      marker("TH2", "shape", 2.5),   marker("JAW", "shape", 0.5),
+      marker("TH1", "shape", 2.0),   {{"marker", "TH9"}, {"role", "shape"}, {"visible", json{{"count", 0}}}}};
+  face["worst_frames"] = {{{"take", "s1"},
+                           {"frame", 42},
+                           {"time_s", 0.42},
+                           {"model", "face"},
+                           {"max_error_mm", 3.5},
+                           {"mean_error_mm", 0.75},
+                           {"max_error_marker", "TH2"},
+                           {"status", "converged"},
+                           {"iterations", 7},
+                           {"cold_retry", false}},
+                          {{"take", "s1"},
+                           {"frame", 3},
+                           {"time_s", 0.03},
+                           {"model", "face"},
+                           {"max_error_mm", 2.0},
+                           {"mean_error_mm", 0.5},
+                           {"max_error_marker", "LIP1"},
+                           {"status", "max_iterations"},
+                           {"iterations", 30},
+                           {"cold_retry", true}}};
+  const json s = {{"face", face}, {"figures", json::array()}};
+  EXPECT_EQ(InvertText(s),
+            "face (target 1.000 mm):\n"
+            "  s1 [held_out] 99/100 frames, visible 0.320 ± 0.100 mm (p99 1.250, p99.9 2.500, max 3.500, n=900)\n"
+            "  held_out: visible 0.320 ± 0.100 mm (p99 1.250, p99.9 2.500, max 3.500, n=900)\n"
+            "  largest p99.9 visible: TH2 2.500 mm, TH1 2.000 mm, LIP1 1.500 mm\n"
+            "  worst frames: s1 frame 42 (0.420 s): max 3.500 mm at TH2, mean 0.750 mm, converged, 7 iterations\n"
+            "                s1 frame 3 (0.030 s): max 2.000 mm at LIP1, mean 0.500 mm, max_iterations, 30 "
+            "iterations, cold retry\n");
+}
+
 }  // namespace
 }  // namespace csw::jobs

@@ -354,6 +354,23 @@ TEST(FaceModel, UnsolvableFramesAreNaN) {
   EXPECT_TRUE(std::isnan(r.params(7, 0)));
   EXPECT_FALSE(r.reconstructed.Visible(3, 10));
   EXPECT_TRUE(r.reconstructed.Visible(4, 10));
+  // Per-frame results (issue 13): why a frame is unsolved, and how the others started.
+  EXPECT_EQ(r.status[3], FrameStatus::kTooFewMarkers);
+  EXPECT_EQ(r.status[7], FrameStatus::kTooFewMarkers);
+  for (int64_t f = 0; f < r.frames(); ++f) {
+    const size_t i = static_cast<size_t>(f);
+    EXPECT_EQ(r.solved[i] != 0, r.status[i] == FrameStatus::kConverged || r.status[i] == FrameStatus::kMaxIterations)
+        << f;
+    EXPECT_EQ(r.converged[i] != 0, r.status[i] == FrameStatus::kConverged) << f;
+    EXPECT_EQ(r.cold_retry[i], 0) << f;  // the face never retries
+    if (!r.solved[i]) {
+      EXPECT_EQ(r.iterations[i], 0) << f;
+      continue;
+    }
+    // Cold: the first frame and the frames after an unsolved one; warm otherwise.
+    EXPECT_EQ(r.cold_start[i], (f == 0 || f == 4 || f == 8) ? 1 : 0) << f;
+  }
+  EXPECT_GE(r.iterations[4], 1);  // a cold start is not at the optimum
   // Every frame NaN: nothing solved, no throw.
   MarkerArray empty(5, 44);
   const InversionResult e = InvertFace(KnownModel(d.truth), empty);

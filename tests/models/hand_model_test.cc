@@ -233,6 +233,28 @@ TEST(HandModel, UnsolvableFramesAreNaNAndTheNextFrameColdStarts) {
     ASSERT_TRUE(r.solved[f]);
     EXPECT_LT((r.params.row(f).transpose() - TrueParams(model, 10.0 * f)).cwiseAbs().maxCoeff(), 1e-5) << f;
   }
+  // Per-frame results (issue 13): unsolved for too few markers; cold after
+  // them, warm otherwise; no retry on exact data.
+  for (int f = 0; f < 6; ++f) {
+    const size_t i = static_cast<size_t>(f);
+    if (f == 2 || f == 4) {
+      EXPECT_EQ(r.status[i], FrameStatus::kTooFewMarkers) << f;
+      EXPECT_EQ(r.iterations[i], 0) << f;
+      continue;
+    }
+    EXPECT_TRUE(r.status[i] == FrameStatus::kConverged || r.status[i] == FrameStatus::kMaxIterations) << f;
+    EXPECT_EQ(r.cold_start[i], f == 1 ? 0 : 1) << f;
+    EXPECT_EQ(r.cold_retry[i], 0) << f;
+  }
+  // One hand marker 50 mm off in frame 1: the warm start ends far above the
+  // retry threshold (3 × training rms + 1 mm), so the frame is retried cold.
+  MarkerArray bumped = take;
+  bumped.at(1, nf)[0] += 50.0f;
+  const InversionResult b = InvertHand(model, bumped, opt);
+  EXPECT_EQ(b.cold_retry[1], 1);
+  EXPECT_EQ(b.cold_retry[0], 0);
+  EXPECT_TRUE(b.solved[1]);
+  EXPECT_GE(b.iterations[1], 1);
   // Wrong column count.
   EXPECT_THROW(InvertHand(model, MarkerArray(3, nm - 1)), InvalidInput);
 }

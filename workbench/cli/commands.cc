@@ -242,6 +242,12 @@ class InvertCommand : public Command {
                      "Folder with <take>.clean.c3d (e.g. from csw simulate --clean): score occluded samples "
                      "and cluster poses against it");
     sub_->add_option("--figures", options_.figures, "Folder for PNG and SVG figures");
+    sub_->add_option("--frames-csv", options_.frames_csv,
+                     "Write one CSV row per (take, frame, model): visible markers, mean and max visible error, "
+                     "solve status, iterations, cold start/retry (columns in docs/models.md)");
+    sub_->add_option("--worst-frames", options_.worst_frames,
+                     "Frames listed per model in the report's worst_frames (by max visible error)")
+        ->capture_default_str();
     sub_->add_flag("!--no-edge-correction", options_.edge_correction,
                    "Reconstruct missing samples from the model alone, without adding the model's misfit "
                    "interpolated from the gap's edges");

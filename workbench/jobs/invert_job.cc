@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <memory>
@@ -34,6 +36,7 @@ std::string InvertOptions::Check() const {
   if (!only.empty() && only != "face" && only != "hand") return "--only must be face or hand";
   if (!(hide_fraction >= 0 && hide_fraction < 1)) return "--hide must be in [0, 1)";
   if (threads < 0) return "--threads must be >= 0";
+  if (worst_frames < 0) return "--worst-frames must be >= 0";
   if (inversion.max_iterations < 1) return "--max-iterations must be >= 1";
   if (!(inversion.prior_mm >= 0)) return "--prior must be >= 0";
   return "";
@@ -63,9 +66,61 @@ struct TakeJob {
   std::vector<std::pair<int64_t, int>> hidden;  // (frame, column) hidden on purpose
   MarkerArray truth;                            // clean markers (model order), empty when none
   InversionResult result;
-  MarkerArray model_only;  // reconstruction before the gap correction
-  std::string role;        // "training" or "held_out"
+  MarkerArray model_only;           // reconstruction before the gap correction
+  std::string role;                 // "training" or "held_out"
+  double rate_hz = 0;               // the take's frame rate
+  std::vector<FrameReport> frames;  // per frame of the range
 };
+
+double Distance(const float* a, const float* b);
+
+// The per-frame report of one inverted (model, take) pair, from the solve's
+// per-frame results and errors.
+std::vector<FrameReport> MakeFrameReports(const TakeJob& job) {
+  const ModelRun& run = *job.run;
+  const InversionResult& res = job.result;
+  const int nm = static_cast<int>(run.names.size());
+  std::vector<FrameReport> out(static_cast<size_t>(res.frames()));
+  for (int64_t f = 0; f < res.frames(); ++f) {
+    FrameReport& r = out[static_cast<size_t>(f)];
+    const size_t fi = static_cast<size_t>(f);
+    r.take = job.range.take;
+    r.frame = job.range.first + f;
+    r.time_s = job.rate_hz > 0 ? static_cast<double>(r.frame) / job.rate_hz : 0.0;
+    r.model = run.kind;
+    for (int c = 0; c < nm; ++c) {
+      if (job.input.Visible(f, c)) (c < run.cluster ? r.cluster_visible : r.shape_visible)++;
+    }
+    ErrorStats e;
+    int worst = -1;
+    for (int c = run.cluster; c < nm; ++c) {
+      const double v = res.error_mm(f, c);
+      if (!std::isfinite(v)) continue;
+      e.Add(v);
+      if (worst < 0 || v > res.error_mm(f, worst)) worst = c;
+    }
+    r.mean_error_mm = e.count > 0 ? e.mean : std::nan("");
+    r.max_error_mm = e.count > 0 ? e.max : std::nan("");
+    r.max_marker = worst >= 0 ? run.names[static_cast<size_t>(worst)] : "";
+    r.status = res.status[fi];
+    r.iterations = res.iterations[fi];
+    r.cold_start = res.cold_start[fi] != 0;
+    r.cold_retry = res.cold_retry[fi] != 0;
+    r.hidden_mean_mm = r.hidden_max_mm = std::nan("");
+  }
+  std::vector<ErrorStats> hidden(out.size());
+  for (const auto& [f, c] : job.hidden) {
+    const float* rec = res.reconstructed.at(f, c);
+    if (!IsMissing(rec[0])) hidden[static_cast<size_t>(f)].Add(Distance(rec, job.original.at(f, c)));
+  }
+  for (size_t f = 0; f < out.size(); ++f) {
+    if (hidden[f].count == 0) continue;
+    out[f].hidden = static_cast<int>(hidden[f].count);
+    out[f].hidden_mean_mm = hidden[f].mean;
+    out[f].hidden_max_mm = hidden[f].max;
+  }
+  return out;
+}
 
 std::vector<std::unique_ptr<ModelRun>> MakeRuns(const ModelFile& models, const InvertOptions& options) {
   std::vector<std::unique_ptr<ModelRun>> runs;
@@ -145,6 +200,7 @@ std::vector<std::unique_ptr<TakeJob>> LoadJobs(const Corpus& corpus, const std::
             BindNames(run->set, clean.marker_names, run->names, options.truth + "/" + ranges[i].take + ".clean.c3d");
         job->truth = Extract(clean.markers, tc, ranges[i].first, ranges[i].count);
       }
+      job->rate_hz = take.rate_hz;
       job->role = "held_out";
       for (const std::string& spec : run->training) {
         if (TrainingSpecOverlaps(spec, ranges[i], take.frames())) job->role = "training";
@@ -164,19 +220,23 @@ double Distance(const float* a, const float* b) {
 json Score(const ModelRun& run, const std::vector<std::unique_ptr<TakeJob>>& jobs, const InvertOptions& options,
            json& summary) {
   json takes = json::array();
-  std::map<std::string, ErrorStats> visible_by_role, hidden_by_role, occluded_by_role, hidden_model_by_role,
+  std::map<std::string, ErrorSamples> visible_by_role, hidden_by_role, occluded_by_role, hidden_model_by_role,
       occluded_model_by_role;
-  ErrorStats rot_err, trans_err;
+  ErrorSamples rot_err, trans_err;
   // Per model marker (cluster markers included), pooled over takes.
   const size_t n_markers = run.names.size();
-  std::vector<ErrorStats> marker_visible(n_markers), marker_hidden(n_markers), marker_occluded(n_markers);
+  std::vector<ErrorSamples> marker_visible(n_markers), marker_hidden(n_markers), marker_occluded(n_markers);
+  std::vector<const FrameReport*> worst;  // frames with a visible error
   std::vector<report::ErrorBar> bars;
   for (const auto& jp : jobs) {
     const TakeJob& job = *jp;
     if (job.run != &run) continue;
     const InversionResult& res = job.result;
     const int nm = static_cast<int>(run.names.size());
-    ErrorStats visible, hidden, occluded, hidden_model, occluded_model, rot, trans;
+    ErrorSamples visible, hidden, occluded, hidden_model, occluded_model, rot, trans;
+    for (const FrameReport& r : job.frames) {
+      if (std::isfinite(r.max_error_mm)) worst.push_back(&r);
+    }
     for (int64_t f = 0; f < res.frames(); ++f) {
       for (int c = 0; c < nm; ++c) marker_visible[static_cast<size_t>(c)].Add(res.error_mm(f, c));
       for (int c = run.cluster; c < nm; ++c) visible.Add(res.error_mm(f, c));
@@ -232,7 +292,7 @@ json Score(const ModelRun& run, const std::vector<std::unique_ptr<TakeJob>>& job
     occluded_model_by_role[job.role].Merge(occluded_model);
     rot_err.Merge(rot);
     trans_err.Merge(trans);
-    bars.push_back({job.range.spec, visible.mean, visible.sd, visible.max, job.role == "held_out"});
+    bars.push_back({job.range.spec, visible.stats.mean, visible.stats.sd, visible.stats.max, job.role == "held_out"});
   }
   json m = {{"takes", takes}, {"target_mm", run.target_mm}};
   json per_marker = json::array();
@@ -257,8 +317,8 @@ json Score(const ModelRun& run, const std::vector<std::unique_ptr<TakeJob>>& job
     }
     m[role] = r;
   }
-  auto pooled = [](const std::map<std::string, ErrorStats>& by_role) {
-    ErrorStats a;
+  auto pooled = [](const std::map<std::string, ErrorSamples>& by_role) {
+    ErrorSamples a;
     for (const auto& [k, v] : by_role) a.Merge(v);
     return StatsJson(a);
   };
@@ -272,6 +332,12 @@ json Score(const ModelRun& run, const std::vector<std::unique_ptr<TakeJob>>& job
     m["overall"]["occluded_model"] = pooled(occluded_model_by_role);
     m["overall"]["pose"] = {{"rotation_deg", StatsJson(rot_err, "deg")}, {"translation_mm", StatsJson(trans_err)}};
   }
+  // Worst first; ties in take and frame order (the order collected).
+  const size_t n_worst = std::min(worst.size(), static_cast<size_t>(options.worst_frames));
+  std::stable_sort(worst.begin(), worst.end(),
+                   [](const FrameReport* a, const FrameReport* b) { return a->max_error_mm > b->max_error_mm; });
+  m["worst_frames"] = json::array();
+  for (size_t i = 0; i < n_worst; ++i) m["worst_frames"].push_back(FrameJson(*worst[i]));
   if (!options.figures.empty()) {
     fs::create_directories(options.figures);
     for (const char* ext : {".png", ".svg"}) {
@@ -283,6 +349,21 @@ json Score(const ModelRun& run, const std::vector<std::unique_ptr<TakeJob>>& job
     }
   }
   return m;
+}
+
+// Every frame of every job: take (selection order), frame, model. LoadJobs
+// makes the jobs take by take, one per model (`models` of them) in run order.
+void WriteFramesCsv(const std::vector<std::unique_ptr<TakeJob>>& jobs, size_t models, const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw IoError(path, "cannot open for writing");
+  out << FrameCsvHeader() << "\n";
+  for (size_t a = 0; a + models <= jobs.size(); a += models) {
+    for (size_t f = 0; f < jobs[a]->frames.size(); ++f) {
+      for (size_t j = a; j < a + models; ++j) out << FrameCsvRow(jobs[j]->frames[f]) << "\n";
+    }
+  }
+  out.close();
+  if (!out) throw IoError(path, "write failed");
 }
 
 // Write-back: one new take version per take, in one transaction.
@@ -347,6 +428,7 @@ json Invert(const InvertOptions& options, Progress& progress) {
     // filler reconstructed (not the shape model) is left as filled.
     const bool gaussian = job.run->hand && !job.run->hand->fill.empty() && options.inversion.gaussian_fill;
     if (options.edge_correction && !gaussian) CorrectGapsWithEdgeResiduals(job.input, &job.result);
+    job.frames = MakeFrameReports(job);
   });
 
   json summary;
@@ -357,8 +439,72 @@ json Invert(const InvertOptions& options, Progress& progress) {
     json scores = Score(*run, jobs, options, summary);
     summary[run->kind] = std::move(scores);
   }
+  if (!options.frames_csv.empty()) {
+    WriteFramesCsv(jobs, runs.size(), options.frames_csv);
+    summary["frames_csv"] = options.frames_csv;
+  }
   if (options.fill) summary["filled"] = WriteFilled(corpus, ranges, jobs, options, progress);
   return summary;
+}
+
+namespace {
+
+std::string CsvField(const std::string& v) {
+  if (v.find_first_of(",\"\r\n") == std::string::npos) return v;
+  std::string q = "\"";
+  for (char ch : v) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return q + "\"";
+}
+
+std::string Number(double v, const char* format) {
+  if (!std::isfinite(v)) return "";
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), format, v);
+  return buf;
+}
+
+}  // namespace
+
+std::string FrameCsvHeader() {
+  return "take,frame,time_s,model,cluster_visible,shape_visible,mean_error_mm,max_error_mm,max_error_marker,"
+         "status,iterations,start,cold_retry,hidden,hidden_mean_mm,hidden_max_mm";
+}
+
+std::string FrameCsvRow(const FrameReport& r) {
+  std::string s = CsvField(r.take) + "," + std::to_string(r.frame) + "," + Number(r.time_s, "%.6f") + "," + r.model +
+                  "," + std::to_string(r.cluster_visible) + "," + std::to_string(r.shape_visible) + "," +
+                  Number(r.mean_error_mm, "%.4f") + "," + Number(r.max_error_mm, "%.4f") + "," +
+                  CsvField(r.max_marker) + "," + FrameStatusName(r.status) + "," + std::to_string(r.iterations) + ",";
+  const bool solved = r.status == FrameStatus::kConverged || r.status == FrameStatus::kMaxIterations;
+  s += solved ? (r.cold_start ? "cold" : "warm") : "";
+  s += r.cold_retry ? ",yes" : ",no";
+  s += "," + std::to_string(r.hidden) + "," + Number(r.hidden_mean_mm, "%.4f") + "," + Number(r.hidden_max_mm, "%.4f");
+  return s;
+}
+
+json FrameJson(const FrameReport& r) {
+  const bool solved = r.status == FrameStatus::kConverged || r.status == FrameStatus::kMaxIterations;
+  json j = {{"take", r.take},
+            {"frame", r.frame},
+            {"time_s", r.time_s},
+            {"model", r.model},
+            {"cluster_visible", r.cluster_visible},
+            {"shape_visible", r.shape_visible},
+            {"status", FrameStatusName(r.status)},
+            {"iterations", r.iterations},
+            {"start", solved ? (r.cold_start ? "cold" : "warm") : ""},
+            {"cold_retry", r.cold_retry}};
+  if (std::isfinite(r.max_error_mm)) {
+    j["mean_error_mm"] = r.mean_error_mm;
+    j["max_error_mm"] = r.max_error_mm;
+    j["max_error_marker"] = r.max_marker;
+  }
+  if (r.hidden > 0) {
+    j["hidden"] = r.hidden;
+    j["hidden_mean_mm"] = r.hidden_mean_mm;
+    j["hidden_max_mm"] = r.hidden_max_mm;
+  }
+  return j;
 }
 
 MarkerArray ModelReconstruction(const Take& take, const InvertOptions& options, const std::string& where,

@@ -27,14 +27,49 @@ struct InvertOptions {
   // Add the model's misfit at the edges of each gap, interpolated across it, to
   // the reconstruction of missing samples (CorrectGapsWithEdgeResiduals).
   bool edge_correction = true;
+  // Per-frame errors: one CSV row per (take, frame, model) into this file ("" =
+  // none; columns in docs/models.md, "Per-frame errors").
+  std::string frames_csv;
+  int worst_frames = 20;  // frames listed per model in the JSON's "worst_frames" (by max visible error)
   InversionOptions inversion;
   std::string Check() const;
 };
 
-// Per model: per take and overall (training / held-out) mean, sd, max
-// absolute errors (mm) of visible samples; hidden and occluded samples when
-// asked; pose errors against the truth. model_reports.h: InvertText renders it.
+// Per model: per take, per marker and overall (training / held-out) mean, sd,
+// 99th and 99.9th percentiles and max absolute errors (mm) of visible samples;
+// hidden and occluded samples when asked; pose errors against the truth; the
+// worst frames (by max visible error). Writes options.frames_csv when given.
+// model_reports.h: InvertText renders it.
 nlohmann::json Invert(const InvertOptions& options, Progress& progress);
+
+// One frame of one take under one model, as in `csw invert --frames-csv`.
+// Errors are those of the visible shape markers (the samples of the per-take
+// "visible" statistics); NaN when none is visible or the frame is not solved.
+struct FrameReport {
+  std::string take;          // the take's name
+  int64_t frame = 0;         // 0-based frame of the take (--takes NAME@frame:end selects it)
+  double time_s = 0;         // frame / the take's rate
+  std::string model;         // "face" or "hand"
+  int cluster_visible = 0;   // visible cluster (head / forearm) markers
+  int shape_visible = 0;     // visible shape (face + throat / hand) markers
+  double mean_error_mm = 0;  // mean |reconstructed − observed| over the visible shape markers
+  double max_error_mm = 0;   // largest of them
+  std::string max_marker;    // the marker with the largest error, "" when none
+  FrameStatus status = FrameStatus::kTooFewMarkers;
+  int iterations = 0;       // solver iterations of the kept solve
+  bool cold_start = false;  // the kept solve started cold
+  bool cold_retry = false;  // a warm start was retried from a cold start
+  // Samples hidden on purpose (--hide) in this frame and their reconstruction
+  // errors (the per-take "hidden" statistics); 0 and NaN without --hide.
+  int hidden = 0;
+  double hidden_mean_mm = 0;
+  double hidden_max_mm = 0;
+};
+
+// The CSV header and one row (no newline) of FrameReport, RFC 4180 quoting.
+std::string FrameCsvHeader();
+std::string FrameCsvRow(const FrameReport& row);
+nlohmann::json FrameJson(const FrameReport& row);
 
 // The models' reconstruction of one whole take, in the take's column layout:
 // every marker that a model of the file (options.only: "face", "hand", "" =

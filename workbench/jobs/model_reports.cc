@@ -1,6 +1,9 @@
 #include "workbench/jobs/model_reports.h"
 
+#include <algorithm>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 namespace csw::jobs {
 
@@ -14,8 +17,11 @@ std::string StatsText(const json& j) {
   std::ostringstream t;
   t.setf(std::ios::fixed);
   t.precision(3);
-  t << j["mean_mm"].get<double>() << " ± " << j["sd_mm"].get<double>() << " mm (max " << j["max_mm"].get<double>()
-    << ", n=" << j["count"].get<int64_t>() << ")";
+  t << j["mean_mm"].get<double>() << " ± " << j["sd_mm"].get<double>() << " mm (";
+  if (j.contains("p99_mm")) {
+    t << "p99 " << j["p99_mm"].get<double>() << ", p99.9 " << j["p99_9_mm"].get<double>() << ", ";
+  }
+  t << "max " << j["max_mm"].get<double>() << ", n=" << j["count"].get<int64_t>() << ")";
   return t.str();
 }
 
@@ -24,6 +30,14 @@ std::string StatsText(const json& j) {
 json StatsJson(const ErrorStats& s, const std::string& unit) {
   if (s.count == 0) return json{{"count", 0}};
   return json{{"count", s.count}, {"mean_" + unit, s.mean}, {"sd_" + unit, s.sd}, {"max_" + unit, s.max}};
+}
+
+json StatsJson(const ErrorSamples& s, const std::string& unit) {
+  json j = StatsJson(s.stats, unit);
+  if (s.stats.count == 0) return j;
+  j["p99_" + unit] = s.Percentile(99.0);
+  j["p99_9_" + unit] = s.Percentile(99.9);
+  return j;
 }
 
 std::string FitText(const json& s) {
@@ -115,6 +129,34 @@ std::string InvertText(const json& s) {
       if (p["rotation_deg"].value("count", 0) > 0) {
         o << "  pose vs truth: " << p["rotation_deg"]["mean_deg"].get<double>() << "° and "
           << p["translation_mm"]["mean_mm"].get<double>() << " mm on average\n";
+      }
+    }
+    // The 3 shape markers with the largest 99.9th percentile, visible and hidden.
+    if (m.contains("markers")) {
+      for (const char* which : {"visible", "hidden"}) {
+        std::vector<std::pair<double, std::string>> ranked;
+        for (const auto& e : m["markers"]) {
+          if (e.value("role", "") != "shape" || !e.contains(which) || !e[which].contains("p99_9_mm")) continue;
+          ranked.emplace_back(e[which]["p99_9_mm"].get<double>(), e["marker"].get<std::string>());
+        }
+        if (ranked.empty()) continue;
+        std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+        o << "  largest p99.9 " << which << ":";
+        for (size_t i = 0; i < std::min<size_t>(ranked.size(), 3); ++i) {
+          o << (i ? ", " : " ") << ranked[i].second << " " << ranked[i].first << " mm";
+        }
+        o << "\n";
+      }
+    }
+    if (m.contains("worst_frames")) {
+      const json& w = m["worst_frames"];
+      for (size_t i = 0; i < std::min<size_t>(w.size(), 5); ++i) {
+        const json& f = w[i];
+        o << (i == 0 ? "  worst frames: " : "                ") << f["take"].get<std::string>() << " frame "
+          << f["frame"].get<int64_t>() << " (" << f["time_s"].get<double>() << " s): max "
+          << f["max_error_mm"].get<double>() << " mm at " << f["max_error_marker"].get<std::string>() << ", mean "
+          << f["mean_error_mm"].get<double>() << " mm, " << f["status"].get<std::string>() << ", "
+          << f["iterations"].get<int>() << " iterations" << (f["cold_retry"].get<bool>() ? ", cold retry" : "") << "\n";
       }
     }
   }
