@@ -161,14 +161,12 @@ bool Minimise(const GestureFit& fit, const Bounds& bounds, int max_iterations, E
   const Eigen::Index n = th.size();
   for (int it = 0; it < max_iterations; ++it) {
     Eigen::MatrixXd jac(r.size(), n);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      Eigen::VectorXd a = th, b = th;
+    for (Eigen::Index i = 0; i < n; ++i) {  // forward differences
+      Eigen::VectorXd a = th;
       a[i] += h;
-      b[i] -= h;
-      Eigen::VectorXd ra, rb;
+      Eigen::VectorXd ra;
       fit.Solve(a, &ra);
-      fit.Solve(b, &rb);
-      jac.col(i) = (ra - rb) / (2.0 * h);
+      jac.col(i) = (ra - r) / h;
     }
     const Eigen::MatrixXd hess = jac.transpose() * jac;
     const Eigen::VectorXd grad = jac.transpose() * r;
@@ -297,20 +295,37 @@ std::string MovementFitOptions::Check() const {
   if (!(min_duration_s > 0.0 && max_duration_s > min_duration_s)) return "need 0 < min_duration_s < max_duration_s";
   if (!(max_shift_s > 0.0)) return "max_shift_s must be > 0";
   if (!(min_amplitude >= 0.0)) return "min_amplitude must be >= 0";
+  if (!(lookback_s > 0.0)) return "lookback_s must be > 0";
+  if (!(target_tolerance_s > 0.0)) return "target_tolerance_s must be > 0";
+  if (refinement_passes < 0 || refinement_passes > 10) return "refinement_passes must be in [0, 10]";
+  if (!(lookahead_fraction > 0.0 && lookahead_fraction <= 1.0)) return "lookahead_fraction must be in (0, 1]";
   if (max_iterations < 1) return "max_iterations must be >= 1";
   return "";
 }
 
-MovementEstimate EstimateMovement(const SampledTrajectory& tr, double previous_target_s, double target_s,
-                                  double next_target_s, const MovementFitOptions& o) {
-  CheckTrajectory(tr);
+namespace {
+
+// What an earlier pass measured of the neighbouring movements (k = 0: into the
+// previous target, k = 1: the next one).
+struct NeighbourHint {
+  bool known[2] = {false, false};
+  bool moved[2] = {true, true};
+  double onset[2] = {0.0, 0.0}, target[2] = {0.0, 0.0};
+};
+
+MovementEstimate FitWindow(const SampledTrajectory& tr, double previous_target_s, double target_s, double next_target_s,
+                           const MovementFitOptions& o, const NeighbourHint& hint) {
   if (std::string why = o.Check(); !why.empty()) throw InvalidInput("movement timing options: " + why);
   if (!(previous_target_s < target_s && target_s < next_target_s))
     throw InvalidInput("movement timing: the target times must increase (previous < target < next)");
   MovementEstimate e;
-  const double lookback = std::max(0.15, 0.5 * (target_s - previous_target_s));
+  // The data: from a little before the previous target (the end of the
+  // movement into it) to the middle of the next stretch (the start of the next
+  // movement), so that the movements two keys away stay out.
+  const double lookback = o.lookback_s;
+  const double data_end = target_s + o.lookahead_fraction * (next_target_s - target_s);
   const int64_t first = FrameAtOrAfter(tr, previous_target_s - lookback);
-  const int64_t end = std::min(tr.frames(), FrameAtOrAfter(tr, next_target_s) + 1);
+  const int64_t end = std::min(tr.frames(), FrameAtOrAfter(tr, data_end) + 1);
   constexpr int kGestures = 3;
   if (end - first < 12) {
     e.reason = "too few frames in the window";
@@ -323,16 +338,20 @@ MovementEstimate EstimateMovement(const SampledTrajectory& tr, double previous_t
   }
   e.samples = fit.count();
   // First guesses: each gesture's speed peak in its own stretch.
-  const double edges[kGestures + 1] = {previous_target_s - lookback, previous_target_s, target_s, next_target_s};
+  const double edges[kGestures + 1] = {previous_target_s - lookback, previous_target_s, target_s, data_end};
   Eigen::VectorXd theta(2 * kGestures);
+  const double tol = o.target_tolerance_s;
   Bounds bounds{Eigen::VectorXd(2 * kGestures),
                 Eigen::VectorXd(2 * kGestures),
                 0.5 * o.min_duration_s,
                 std::vector<bool>(kGestures, true),
-                // Each gesture reaches its target between the middles of the
-                // stretches around its rough target.
-                {-1e300, 0.5 * (previous_target_s + target_s), 0.5 * (target_s + next_target_s)},
-                {0.5 * (previous_target_s + target_s), 0.5 * (target_s + next_target_s), 1e300}};
+                // Each gesture reaches its target within target_tolerance_s of
+                // its rough target and between the middles of the stretches
+                // around it.
+                {previous_target_s - tol, std::max(0.5 * (previous_target_s + target_s), target_s - tol),
+                 std::max(0.5 * (target_s + next_target_s), next_target_s - tol)},
+                {std::min(0.5 * (previous_target_s + target_s), previous_target_s + tol),
+                 std::min(0.5 * (target_s + next_target_s), target_s + tol), next_target_s + tol}};
   for (int k = 0; k < kGestures; ++k) {
     double onset, duration;
     GuessGesture(tr, edges[k], edges[k + 1], o, &onset, &duration);
@@ -343,6 +362,26 @@ MovementEstimate EstimateMovement(const SampledTrajectory& tr, double previous_t
     bounds.lo[2 * k + 1] = o.min_duration_s;
     bounds.hi[2 * k + 1] = o.max_duration_s;
   }
+  // Neighbours measured by an earlier pass: start there, move little.
+  std::vector<bool> allowed(kGestures, true);
+  for (int h = 0; h < 2; ++h) {
+    if (!hint.known[h]) continue;
+    const int k = h == 0 ? 0 : 2;
+    const auto ku = static_cast<size_t>(k);
+    if (!hint.moved[h]) {
+      allowed[ku] = false;
+      continue;
+    }
+    constexpr double kNear = 0.03;
+    theta[2 * k] = hint.onset[h];
+    theta[2 * k + 1] = std::clamp(hint.target[h] - hint.onset[h], o.min_duration_s, o.max_duration_s);
+    bounds.lo[2 * k] = hint.onset[h] - kNear;
+    bounds.hi[2 * k] = hint.onset[h] + kNear;
+    bounds.min_target[ku] = hint.target[h] - kNear;
+    bounds.max_target[ku] = hint.target[h] + kNear;
+  }
+  fit.SetActive(allowed);
+  bounds.active = allowed;
   // Two starts for this movement: its speed peak, and the rough times.
   Eigen::VectorXd alt = theta;
   alt[2] = previous_target_s;
@@ -357,9 +396,11 @@ MovementEstimate EstimateMovement(const SampledTrajectory& tr, double previous_t
     return n * std::log(std::max(f.Cost(th), 1e-300) / n) + params * std::log(n);
   };
   double best = bic(fit, theta);
-  std::vector<bool> best_active(kGestures, true);
-  for (const std::vector<bool>& active : {std::vector<bool>{false, true, true}, std::vector<bool>{true, true, false},
-                                          std::vector<bool>{false, true, false}}) {
+  std::vector<bool> best_active = allowed;
+  for (std::vector<bool> active : {std::vector<bool>{false, true, true}, std::vector<bool>{true, true, false},
+                                   std::vector<bool>{false, true, false}}) {
+    for (size_t k = 0; k < active.size(); ++k) active[k] = active[k] && allowed[k];
+    if (active == allowed) continue;
     GestureFit reduced = fit;
     reduced.SetActive(active);
     Bounds b = bounds;
@@ -387,6 +428,14 @@ MovementEstimate EstimateMovement(const SampledTrajectory& tr, double previous_t
   return e;
 }
 
+}  // namespace
+
+MovementEstimate EstimateMovement(const SampledTrajectory& tr, double previous_target_s, double target_s,
+                                  double next_target_s, const MovementFitOptions& o) {
+  CheckTrajectory(tr);
+  return FitWindow(tr, previous_target_s, target_s, next_target_s, o, NeighbourHint());
+}
+
 std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& tr, const std::vector<double>& targets,
                                                 const MovementFitOptions& o) {
   CheckTrajectory(tr);
@@ -395,9 +444,28 @@ std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& tr, con
     if (!(targets[i] > targets[i - 1])) throw InvalidInput("movement timing: the target times must increase");
   std::vector<MovementEstimate> out(targets.size());
   if (!out.empty()) out[0].reason = "first target";
-  for (size_t i = 1; i < targets.size(); ++i) {
-    const double next = i + 1 < targets.size() ? targets[i + 1] : targets[i] + (targets[i] - targets[i - 1]);
-    out[i] = EstimateMovement(tr, targets[i - 1], targets[i], next, o);
+  const auto next_of = [&](size_t i) {
+    return i + 1 < targets.size() ? targets[i + 1] : targets[i] + (targets[i] - targets[i - 1]);
+  };
+  for (size_t i = 1; i < targets.size(); ++i) out[i] = EstimateMovement(tr, targets[i - 1], targets[i], next_of(i), o);
+  // Second pass: each movement again, its neighbours started from (and kept
+  // near) their own first-pass estimates, where each was the central movement
+  // of its window (block coordinate descent on the whole sequence).
+  for (int pass = 0; pass < o.refinement_passes; ++pass) {
+    std::vector<MovementEstimate> refined = out;
+    for (size_t i = 1; i < targets.size(); ++i) {
+      NeighbourHint hint;
+      for (int h = 0; h < 2; ++h) {
+        const size_t j = h == 0 ? i - 1 : i + 1;
+        if (j < 1 || j >= out.size() || !out[j].fitted) continue;
+        hint.known[h] = true;
+        hint.moved[h] = out[j].moved;
+        hint.onset[h] = out[j].onset_s;
+        hint.target[h] = out[j].target_s;
+      }
+      refined[i] = FitWindow(tr, targets[i - 1], targets[i], next_of(i), o, hint);
+    }
+    out = refined;
   }
   return out;
 }

@@ -44,6 +44,16 @@ struct MovementFitOptions {
   // movement counts as "no change" and is left out (moved = false).
   double min_amplitude = 4.0;
   int max_iterations = 60;
+  // Data fitted: from lookback_s before the previous target to
+  // target + lookahead_fraction · (next target − target).
+  double lookback_s = 0.12;
+  // How far each fitted target may lie from its rough time (the rough times'
+  // accuracy: labels, posterior peaks).
+  double target_tolerance_s = 0.08;
+  // EstimateMovements: passes that refit each movement with its neighbours
+  // started from their own estimates.
+  int refinement_passes = 1;
+  double lookahead_fraction = 0.5;
   std::string Check() const;  // "" when valid, else the reason
 };
 
