@@ -10,9 +10,9 @@
 // are the nonlinear parameters (Levenberg-Marquardt); c and β are solved by
 // linear least squares for every trial of the times (variable projection), per
 // dimension over that dimension's finite samples. P = 1 fits a straight path
-// (the exact model of a minimum-jerk movement); P = 2 also lets every dimension
+// (the exact model of a minimum-jerk movement); P = 2 or 3 lets every dimension
 // follow a curved path (features that are nonlinear functions of the moving
-// joints: hand distances). Three gestures are fitted together — the movement
+// joints: use P = 3 for the hand distances). Three gestures are fitted together — the movement
 // into the previous target, this movement, and the next one — so movements that
 // overlap (the next starting before the previous target) are separated.
 // Unlike a fraction-of-peak-speed threshold (16–24 ms late at onset and early at
@@ -73,16 +73,21 @@ struct MovementEstimate {
 // previous key's target near `previous_target_s` and followed by the next key's
 // movement towards `next_target_s` (the three are rough times: labels, posterior
 // peaks, or the expected key times; previous < target < next). The data from
-// previous_target_s − max(0.15 s, (target_s − previous_target_s) / 2) to
-// next_target_s are fitted with three gestures (into previous, this, next).
-// Throws InvalidInput for bad options or unordered times.
+// previous_target_s − lookback_s to target_s + lookahead_fraction ·
+// (next_target_s − target_s) are fitted with three gestures (into previous,
+// this, next; a neighbour is dropped when BIC says it does not move), each
+// target within target_tolerance_s of its rough time. Throws InvalidInput for
+// bad options or unordered times.
 MovementEstimate EstimateMovement(const SampledTrajectory& trajectory, double previous_target_s, double target_s,
                                   double next_target_s, const MovementFitOptions& options = {});
 
 // Every movement of a sequence of rough target times (increasing): element i
 // (i = 1 .. n−1) is the movement from target i−1 to target i; element 0 is not
-// fitted (reason "first target"). The last movement uses target + its duration
-// guess as the next target.
+// fitted (reason "first target"). The last movement uses target + (target −
+// previous) as the next target. After the first pass (EstimateMovement on each
+// window), refinement_passes refit every movement with its neighbours started
+// from their own estimates and kept within 30 ms of them (neighbours estimated
+// as still are left out): the recommended entry point.
 std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& trajectory,
                                                 const std::vector<double>& target_times_s,
                                                 const MovementFitOptions& options = {});
