@@ -143,6 +143,8 @@ std::string TruthToJson(const SimulationResult& r) {
                     {"shape", g.key.shape},
                     {"a1_s", g.key.a1_s},
                     {"end_s", g.key.end_s},
+                    {"consonant_phone", g.key.consonant_phone},
+                    {"vowel_phone", g.key.vowel_phone},
                     {"placement_start_s", g.timing.placement_start_s},
                     {"placement_target_s", g.timing.placement_target_s},
                     {"shape_start_s", g.timing.shape_start_s},
@@ -156,6 +158,7 @@ std::string TruthToJson(const SimulationResult& r) {
     }
   }
   j["keys"] = keys;
+  j["phasing"] = PhasingModelToJson(r.phasing);
   json phones = json::array();
   for (const Phone& p : r.utterance.phones)
     phones.push_back({{"ipa", p.ipa}, {"start_s", p.start_s}, {"end_s", p.end_s}});

@@ -313,6 +313,7 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
   const int nh = script.hand ? hand_.num_markers() : 0;
   const int nj = hand_.num_joints();
   r.utterance = script.utterance;
+  r.phasing = options_.phasing;
   for (size_t i = 0; i < script.keys.size(); ++i)
     r.keys.push_back({script.keys[i], script.timing[i], Eigen::VectorXd(), Eigen::Vector3d::Zero()});
   for (const auto& j : hand_.config().joints) r.joint_names.push_back(j.name);

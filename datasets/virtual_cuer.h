@@ -105,6 +105,7 @@ struct SimulationResult {
   std::vector<uint8_t> state;  // frames × markers MarkerState
   Utterance utterance;         // phones and words on the capture clock
   std::vector<GestureTruth> keys;
+  PhasingModel phasing;  // the model the gesture times were drawn from
   std::vector<std::string> joint_names;
   Eigen::MatrixXd joint_angles;  // frames × joints (radians)
   Eigen::MatrixXd articulation;  // frames × 6 (ArticulatoryParameter order)

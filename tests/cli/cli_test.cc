@@ -345,6 +345,23 @@ TEST(Cli, ExitCodeUsageErrorIsOneBadDataIsTwo) {
   EXPECT_EQ(Csw("import " + Q(dir / "bad.c3d") + " -o " + Q(dir / "c.h5"), dir.path()).code, 2);
 }
 
+// --phasing: a missing file is a usage error, a damaged one bad data; both name
+// the file and write nothing.
+TEST(Cli, SimulatePhasingFileErrorsNameTheFile) {
+  testing::TempDir dir;
+  RunResult missing =
+      Csw("simulate sentences --text bonjour --phasing " + Q(dir / "no.json") + " -o " + Q(dir / "s"), dir.path());
+  EXPECT_EQ(missing.code, 1) << missing.err;
+  EXPECT_NE(missing.err.find("--phasing " + (dir / "no.json").string()), std::string::npos) << missing.err;
+  std::ofstream(dir / "p.json") << R"({"placement_cv": {"start_mean_ms": "early"}})";
+  RunResult bad =
+      Csw("simulate sentences --text bonjour --phasing " + Q(dir / "p.json") + " -o " + Q(dir / "s"), dir.path());
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find((dir / "p.json").string()), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("start_mean_ms"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "s"));
+}
+
 // Point rate and count of valid samples of a C3D written by csw simulate.
 struct C3dFacts {
   double rate_hz = 0;

@@ -114,6 +114,17 @@ TEST(SimulateJobOptionsCheck, RejectsEachBadRequestWithItsReason) {
   o.dropouts_per_s = 11;
   EXPECT_EQ(o.Check(), "simulate: --dropouts must be in [0, 10] per s");
   o.dropouts_per_s = 0.03;
+  o.phasing_file = (dir / "none.json").string();
+  EXPECT_EQ(o.Check(), "simulate: --phasing " + o.phasing_file + ": no such file");
+  std::ofstream(dir / "p.json") << "{}";
+  o.phasing_file = (dir / "p.json").string();
+  EXPECT_EQ(o.Check(), "");
+  o.corpus = "shapes";
+  EXPECT_EQ(o.Check(), "simulate: --phasing applies to the sentences and demo corpora, not shapes");
+  o.corpus = "visemes";
+  EXPECT_EQ(o.Check(), "simulate: --phasing applies to the sentences and demo corpora, not visemes");
+  o.corpus = "sentences";
+  o.phasing_file = "";
   std::ofstream(dir / "file") << "x";
   o.output = (dir / "file").string();
   EXPECT_EQ(o.Check(), "simulate: -o " + o.output + " is a file, not a folder");

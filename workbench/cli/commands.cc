@@ -171,6 +171,8 @@ class SimulateCommand : public Command {
         ->capture_default_str();
     sub_->add_flag("--label-swaps", options_.label_swaps, "Add a temporary swap of two hand marker labels per take");
     sub_->add_flag("--clean", options_.clean, "Also write <take>.clean.c3d without capture artefacts");
+    sub_->add_option("--phasing", options_.phasing_file,
+                     "Phasing-model JSON (docs/virtual-cuer.md): gesture start/target laws instead of the defaults");
   }
   int Run(Progress& progress) override {
     if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);

@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/file_util.h"
 #include "datasets/virtual_cuer.h"
+#include "synth/phasing.h"
 #include "workbench/jobs/job_util.h"
 
 namespace csw::jobs {
@@ -81,6 +82,10 @@ std::string SimulateJobOptions::Check() const {
   std::error_code ec;
   if (!sentences_file.empty() && !fs::is_regular_file(sentences_file, ec))
     return "simulate: --sentences " + sentences_file + ": no such file";
+  if (!phasing_file.empty() && !fs::is_regular_file(phasing_file, ec))
+    return "simulate: --phasing " + phasing_file + ": no such file";
+  if (!phasing_file.empty() && (corpus == "shapes" || corpus == "visemes"))
+    return "simulate: --phasing applies to the sentences and demo corpora, not " + corpus;
   const fs::path out = OutputPath(output);
   if (fs::exists(out, ec) && !fs::is_directory(out, ec)) return "simulate: -o " + output + " is a file, not a folder";
   // Ranges of the capture options (--rate, --noise, --dropouts), in the option's words.
@@ -95,6 +100,7 @@ std::vector<std::string> Simulate(const SimulateJobOptions& options, Progress& p
   if (std::string why = options.Check(); !why.empty()) throw UsageError(why);
   SimulateOptions o = ToSimulateOptions(options);
   if (!options.sentences_file.empty()) o.sentences = ReadSentences(options.sentences_file);
+  if (!options.phasing_file.empty()) o.phasing = LoadPhasingModel(options.phasing_file);
 
   const fs::path out = OutputPath(options.output);
   const fs::path partial = HiddenSibling(out.string(), ".csw-partial");

@@ -28,11 +28,14 @@ struct SimulateJobOptions {
   double dropouts_per_s = 0.03;  // per marker: rate of short dropped-sample runs
   bool label_swaps = false;
   double rate_hz = 120.0;
-  bool clean = false;         // also write <take>.clean.c3d without artefacts
+  bool clean = false;  // also write <take>.clean.c3d without artefacts
+  // Phasing-model JSON (synth/phasing.h LoadPhasingModel) for the gesture
+  // times; "" = the defaults. Read by Simulate (a bad file: ParseError naming it).
+  std::string phasing_file;
   std::string Check() const;  // "" when valid, else the reason (a usage error)
 };
 
-// The datasets options for `options` (sentences_file not read yet).
+// The datasets options for `options` (sentences_file and phasing_file not read yet).
 SimulateOptions ToSimulateOptions(const SimulateJobOptions& options);
 
 // Writes everything into a hidden sibling folder ".<output>.csw-partial" and

@@ -1,0 +1,266 @@
+// Kinematic onset/target estimator (analysis/phasing/movement_timing.h) on
+// synthetic minimum-jerk movements with known times.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "analysis/phasing/movement_timing.h"
+#include "core/error.h"
+#include "tests/testing/testing.h"
+
+namespace csw::phasing {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double MinJerk(double tau) {
+  if (tau <= 0.0) return 0.0;
+  if (tau >= 1.0) return 1.0;
+  return tau * tau * tau * (10.0 - 15.0 * tau + 6.0 * tau * tau);
+}
+
+struct Move {
+  double onset_s, target_s;
+  Eigen::VectorXd delta;
+};
+
+// Superposed minimum-jerk movements from `initial`, sampled on [0, duration_s)
+// with Gaussian noise `noise_mm` per coordinate.
+Eigen::MatrixXd Sample(const Eigen::VectorXd& initial, const std::vector<Move>& moves, double rate_hz,
+                       double duration_s, double noise_mm, std::mt19937_64& rng) {
+  const auto frames = static_cast<Eigen::Index>(std::ceil(duration_s * rate_hz));
+  std::normal_distribution<double> noise(0.0, noise_mm);
+  Eigen::MatrixXd x(frames, initial.size());
+  for (Eigen::Index f = 0; f < frames; ++f) {
+    const double t = static_cast<double>(f) / rate_hz;
+    Eigen::VectorXd v = initial;
+    for (const Move& m : moves) v += m.delta * MinJerk((t - m.onset_s) / (m.target_s - m.onset_s));
+    for (Eigen::Index d = 0; d < v.size(); ++d) x(f, d) = v[d] + (noise_mm > 0.0 ? noise(rng) : 0.0);
+  }
+  return x;
+}
+
+Eigen::VectorXd RandomDirection(int dims, std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Eigen::VectorXd v(dims);
+  for (int d = 0; d < dims; ++d) v[d] = n(rng);
+  return v.normalized();
+}
+
+struct Errors {
+  std::vector<double> onset_ms, target_ms;
+  static double Mean(const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return s / static_cast<double>(v.size());
+  }
+  static double Sd(const std::vector<double>& v) {
+    const double m = Mean(v);
+    double s = 0;
+    for (double x : v) s += (x - m) * (x - m);
+    return std::sqrt(s / static_cast<double>(v.size() - 1));
+  }
+};
+
+// One isolated movement between still holds; rough targets off by up to ±60 ms.
+Errors IsolatedDraws(double rate_hz, int draws, uint64_t seed, int dims, bool gaps) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Errors e;
+  for (int i = 0; i < draws; ++i) {
+    const double duration = 0.1 + 0.3 * u(rng), amplitude = 10.0 + 140.0 * u(rng);
+    const double onset = 0.5 + u(rng) / rate_hz;
+    Move m{onset, onset + duration, amplitude * RandomDirection(dims, rng)};
+    Eigen::MatrixXd x = Sample(Eigen::VectorXd::Constant(dims, 20.0), {m}, rate_hz, onset + duration + 0.6, 0.2, rng);
+    if (gaps) {  // a 5-frame gap somewhere in the movement, and single missing samples
+      const auto g = static_cast<Eigen::Index>((onset + duration * u(rng)) * rate_hz);
+      x.middleRows(g, 5).setConstant(kNaN);
+      for (Eigen::Index f = 0; f < x.rows(); f += 7) x(f, f % dims) = kNaN;
+    }
+    SampledTrajectory tr{&x, rate_hz, 0.0};
+    const double prev = onset - 0.05 - 0.15 * u(rng);
+    const double target = m.target_s + 0.12 * (u(rng) - 0.5);
+    const MovementEstimate est = EstimateMovement(tr, prev, target, target + 0.35);
+    EXPECT_TRUE(est.fitted && est.moved) << est.reason;
+    EXPECT_NEAR(est.amplitude, amplitude, 1.0);
+    e.onset_ms.push_back(1000.0 * (est.onset_s - m.onset_s));
+    e.target_ms.push_back(1000.0 * (est.target_s - m.target_s));
+  }
+  return e;
+}
+
+TEST(PhasingMovement, NoiseFreeMinimumJerkIsExact) {
+  std::mt19937_64 rng(3);
+  Move m{0.4137, 0.4137 + 0.2512, Eigen::Vector3d(30.0, -40.0, 12.0)};
+  const Eigen::MatrixXd x = Sample(Eigen::Vector3d(1, 2, 3), {m}, 120.0, 1.3, 0.0, rng);
+  SampledTrajectory tr{&x, 120.0, 0.0};
+  const MovementEstimate e = EstimateMovement(tr, 0.3, 0.7, 1.1);
+  ASSERT_TRUE(e.moved);
+  EXPECT_NEAR(e.onset_s, m.onset_s, 1e-4);
+  EXPECT_NEAR(e.target_s, m.target_s, 1e-4);
+  EXPECT_NEAR(e.amplitude, m.delta.norm(), 1e-3);
+  EXPECT_LT(e.rms_residual, 1e-3);
+}
+
+// The brief's bar: |mean bias| < 5 ms at onset and target, durations 100-400 ms,
+// amplitudes 10-150 mm, 0.2 mm noise per coordinate, 100 and 120 Hz.
+TEST(PhasingMovement, MinimumJerkBiasBelow5ms) {
+  const int draws = csw::testing::kSanitized ? 40 : 300;
+  for (double rate : {100.0, 120.0}) {
+    const Errors e = IsolatedDraws(rate, draws, 11 + static_cast<uint64_t>(rate), 3, false);
+    const double mo = Errors::Mean(e.onset_ms), mt = Errors::Mean(e.target_ms);
+    const double so = Errors::Sd(e.onset_ms), st = Errors::Sd(e.target_ms);
+    std::printf("[phasing] %.0f Hz 3-D: onset bias %+.2f ms sd %.2f, target bias %+.2f ms sd %.2f (n=%d)\n", rate, mo,
+                so, mt, st, draws);
+    EXPECT_LT(std::abs(mo), 5.0);
+    EXPECT_LT(std::abs(mt), 5.0);
+    EXPECT_LT(so, 8.0);  // stated bound on the spread of single estimates
+    EXPECT_LT(st, 8.0);
+  }
+}
+
+TEST(PhasingMovement, SevenDimensionsWithGaps) {
+  const int draws = csw::testing::kSanitized ? 30 : 200;
+  const Errors e = IsolatedDraws(120.0, draws, 5, 7, true);
+  const double mo = Errors::Mean(e.onset_ms), mt = Errors::Mean(e.target_ms);
+  std::printf("[phasing] 120 Hz 7-D with gaps: onset bias %+.2f ms sd %.2f, target bias %+.2f ms sd %.2f\n", mo,
+              Errors::Sd(e.onset_ms), mt, Errors::Sd(e.target_ms));
+  EXPECT_LT(std::abs(mo), 5.0);
+  EXPECT_LT(std::abs(mt), 5.0);
+  EXPECT_LT(Errors::Sd(e.onset_ms), 8.0);
+  EXPECT_LT(Errors::Sd(e.target_ms), 8.0);
+}
+
+// A fraction-of-peak-speed threshold is late at onset and early at target: at
+// 20 % of the peak, τ(1 − τ) = sqrt(0.2 · 1.875 / 30) gives τ = 0.1283, i.e.
+// 0.1283 × duration (32 ms for 250 ms). The fit has no such bias.
+TEST(PhasingMovement, ThresholdIsBiasedFitIsNot) {
+  std::mt19937_64 rng(8);
+  const double rate = 120.0, duration = 0.25;
+  Move m{0.5, 0.5 + duration, Eigen::Vector3d(60.0, 0.0, 0.0)};
+  const Eigen::MatrixXd x = Sample(Eigen::Vector3d::Zero(), {m}, rate, 1.4, 0.0, rng);
+  SampledTrajectory tr{&x, rate, 0.0};
+  const MovementEstimate th = ThresholdMovement(tr, 0.3, 0.95, 0.2);
+  const double tau = 0.5 - std::sqrt(0.25 - std::sqrt(0.2 * 1.875 / 30.0));
+  EXPECT_NEAR(tau, 0.1283, 1e-4);
+  // The threshold method reports the first frame above the level: within one frame.
+  EXPECT_NEAR(th.onset_s - m.onset_s, tau * duration, 1.0 / rate);
+  EXPECT_NEAR(m.target_s - th.target_s, tau * duration, 1.0 / rate);
+  const MovementEstimate fit = EstimateMovement(tr, 0.3, 0.75, 1.1);
+  EXPECT_NEAR(fit.onset_s, m.onset_s, 1e-4);
+  EXPECT_NEAR(fit.target_s, m.target_s, 1e-4);
+}
+
+// Four movements; the second starts 20-100 ms before the first reaches its
+// target (superposition), the others 0-100 ms after the previous target: the
+// two overlapping movements are recovered.
+TEST(PhasingMovement, OverlappingMovements) {
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Errors e;
+  const int draws = csw::testing::kSanitized ? 30 : 200;
+  for (int i = 0; i < draws; ++i) {
+    std::vector<Move> moves;
+    double t = 0.5;
+    for (int k = 0; k < 4; ++k) {
+      const double duration = 0.2 + 0.2 * u(rng), amplitude = 30.0 + 120.0 * u(rng);
+      moves.push_back({t, t + duration, amplitude * RandomDirection(3, rng)});
+      t += duration + (k == 0 ? -(0.02 + 0.08 * u(rng)) : 0.1 * u(rng));  // overlap of movements 1 and 2
+    }
+    const Eigen::MatrixXd x = Sample(Eigen::Vector3d::Zero(), moves, 120.0, t + 1.0, 0.2, rng);
+    SampledTrajectory tr{&x, 120.0, 0.0};
+    std::vector<double> targets = {0.4};
+    for (const Move& m : moves) targets.push_back(m.target_s + 0.06 * (u(rng) - 0.5));
+    const std::vector<MovementEstimate> est = EstimateMovements(tr, targets);
+    ASSERT_EQ(est.size(), targets.size());
+    EXPECT_FALSE(est[0].fitted);
+    for (int k : {0, 1}) {  // the two overlapping movements
+      const Move& m = moves[static_cast<size_t>(k)];
+      ASSERT_TRUE(est[static_cast<size_t>(k) + 1].moved);
+      e.onset_ms.push_back(1000.0 * (est[static_cast<size_t>(k) + 1].onset_s - m.onset_s));
+      e.target_ms.push_back(1000.0 * (est[static_cast<size_t>(k) + 1].target_s - m.target_s));
+    }
+  }
+  const double mo = Errors::Mean(e.onset_ms), mt = Errors::Mean(e.target_ms);
+  std::printf("[phasing] overlapping: onset bias %+.2f ms sd %.2f, target bias %+.2f ms sd %.2f\n", mo,
+              Errors::Sd(e.onset_ms), mt, Errors::Sd(e.target_ms));
+  EXPECT_LT(std::abs(mo), 5.0);
+  EXPECT_LT(std::abs(mt), 5.0);
+  EXPECT_LT(Errors::Sd(e.onset_ms), 10.0);
+  EXPECT_LT(Errors::Sd(e.target_ms), 10.0);
+}
+
+// Curved paths (each dimension a nonlinear function of the moving parameter,
+// as the hand distances are of the joint angles): P = 2 stays unbiased.
+TEST(PhasingMovement, CurvedPathWithTwoPathTerms) {
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.2);
+  Errors e;
+  MovementFitOptions o;
+  o.path_terms = 2;
+  const int draws = csw::testing::kSanitized ? 20 : 150;
+  for (int i = 0; i < draws; ++i) {
+    const double rate = 120.0, duration = 0.15 + 0.25 * u(rng), onset = 0.5 + u(rng) / rate;
+    Eigen::MatrixXd x(static_cast<Eigen::Index>((onset + duration + 0.6) * rate), 7);
+    Eigen::VectorXd from(7), to(7);
+    for (int d = 0; d < 7; ++d) {
+      from[d] = 1.5 * u(rng);
+      to[d] = 1.5 * u(rng);
+    }
+    for (Eigen::Index f = 0; f < x.rows(); ++f) {
+      const double s = MinJerk((static_cast<double>(f) / rate - onset) / duration);
+      for (int d = 0; d < 7; ++d)  // a chord 80 cos(angle / 2) of a folding finger
+        x(f, d) = 80.0 * std::cos(0.5 * (from[d] + s * (to[d] - from[d]))) + noise(rng);
+    }
+    SampledTrajectory tr{&x, 120.0, 0.0};
+    const MovementEstimate est = EstimateMovement(tr, onset - 0.1, onset + duration, onset + duration + 0.4, o);
+    if (!est.moved) continue;
+    e.onset_ms.push_back(1000.0 * (est.onset_s - onset));
+    e.target_ms.push_back(1000.0 * (est.target_s - onset - duration));
+  }
+  ASSERT_GT(e.onset_ms.size(), static_cast<size_t>(draws * 9 / 10));
+  const double mo = Errors::Mean(e.onset_ms), mt = Errors::Mean(e.target_ms);
+  std::printf("[phasing] curved 7-D, P=2: onset bias %+.2f ms sd %.2f, target bias %+.2f ms sd %.2f\n", mo,
+              Errors::Sd(e.onset_ms), mt, Errors::Sd(e.target_ms));
+  EXPECT_LT(std::abs(mo), 5.0);
+  EXPECT_LT(std::abs(mt), 5.0);
+}
+
+TEST(PhasingMovement, NoChangeIsLeftOut) {
+  std::mt19937_64 rng(2);
+  // Still between two real movements: the middle "movement" has no change.
+  std::vector<Move> moves = {{0.4, 0.7, Eigen::Vector3d(50, 0, 0)}, {1.3, 1.6, Eigen::Vector3d(0, 40, 0)}};
+  const Eigen::MatrixXd x = Sample(Eigen::Vector3d::Zero(), moves, 120.0, 2.2, 0.2, rng);
+  SampledTrajectory tr{&x, 120.0, 0.0};
+  const std::vector<MovementEstimate> est = EstimateMovements(tr, {0.3, 0.7, 1.0, 1.6});
+  ASSERT_EQ(est.size(), 4u);
+  EXPECT_TRUE(est[1].moved);
+  EXPECT_NEAR(est[1].onset_s, 0.4, 0.01);
+  EXPECT_TRUE(est[1].fitted);
+  EXPECT_FALSE(est[2].moved);
+  EXPECT_EQ(est[2].reason, "no change");
+  EXPECT_LT(est[2].amplitude, 2.0);
+  EXPECT_TRUE(est[3].moved);
+  EXPECT_NEAR(est[3].onset_s, 1.3, 0.01);
+  EXPECT_NEAR(est[3].target_s, 1.6, 0.01);
+}
+
+TEST(PhasingMovement, BadInputThrows) {
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(100, 3);
+  SampledTrajectory tr{&x, 120.0, 0.0};
+  EXPECT_THROW(EstimateMovement(tr, 0.5, 0.4, 0.6), InvalidInput);
+  MovementFitOptions o;
+  o.path_terms = 0;
+  EXPECT_THROW(EstimateMovement(tr, 0.1, 0.4, 0.6, o), InvalidInput);
+  // A window with too few frames is reported, not thrown.
+  const MovementEstimate e = EstimateMovement(tr, 0.01, 0.02, 0.03);
+  EXPECT_FALSE(e.fitted);
+  EXPECT_FALSE(e.reason.empty());
+}
+
+}  // namespace
+}  // namespace csw::phasing
