@@ -655,12 +655,13 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
   coords.conservativeResize(rows, Eigen::NoChange);
 
   if (progress) progress->Update("hand model: regression", 0.0);
-  model.shape = options.weighted_angle_pca
-                    ? FitWeightedShapeModel(angles, coords, options.angle_components, options.regression)
-                    : FitHandShapeModel(angles, coords, options.angle_components, options.regression);
   for (const auto& seg : layout.segments) {
     for (const char* what : {"flexion", "spread", "twist"}) model.angle_names.push_back(seg.name + "." + what);
   }
+  HandRegressionOptions regression = options.regression;
+  regression.angle_names = model.angle_names;  // warnings name angles, not indices
+  model.shape = options.weighted_angle_pca ? FitWeightedShapeModel(angles, coords, options.angle_components, regression)
+                                           : FitHandShapeModel(angles, coords, options.angle_components, regression);
   const int p = model.num_parameters();
   model.param_scale.resize(p);
   for (int k = 0; k < p; ++k) {
