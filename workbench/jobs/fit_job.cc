@@ -212,7 +212,8 @@ void FitHand(const FitContext& x, ModelFile* update) {
   HandModel m = FitHandModel(layout, x.Load(names), ho, &x.progress);
   WithProvenance(x.info, &m.info);
   WithProvenance(x.info, &m.forearm.info);
-  const std::vector<std::string>& warnings = m.shape.regression.warnings;  // shown by FitText as well
+  std::vector<std::string> warnings = m.warnings;  // shown by FitText as well as in the JSON
+  warnings.insert(warnings.end(), m.shape.regression.warnings.begin(), m.shape.regression.warnings.end());
   x.summary["hand"] = {{"parameters", m.num_parameters()},
                        {"angles", m.angle_names.size()},
                        {"variance_explained", m.shape.angle_pca.variance_explained},
