@@ -71,6 +71,45 @@ void Validate(const MarkerSet& set, const std::string& file) {
     if (s.parent.empty() && s.markers.size() < 3)
       fail("hand segment \"" + s.name + "\" has no parent and needs at least 3 markers");
   }
+  // Each marker plays one role: the rigid clusters, face, throat and every hand segment are disjoint
+  // (the face model keeps head, face and throat markers in one layout; the hand model gives each marker
+  // one segment). fingertips and palm name markers for the hand distances: they may repeat markers of
+  // the hand segments, but no other role's, and not each other's.
+  std::map<std::string, std::string> owner;  // marker -> role
+  auto claim = [&](const std::string& m, const std::string& role) {
+    auto [it, ok] = owner.emplace(m, role);
+    if (!ok && it->second != role)
+      fail("marker \"" + m + "\" is in both " + it->second + " and " + role + " (a marker plays one role)");
+  };
+  for (const auto& m : set.head_cluster) claim(m, "head_cluster");
+  for (const auto& m : set.face) claim(m, "face");
+  for (const auto& t : set.throat) claim(t.marker, "throat");
+  for (const auto& m : set.forearm_cluster) claim(m, "forearm_cluster");
+  for (const auto& s : set.hand_segments) {
+    std::set<std::string> in_segment;
+    for (const auto& m : s.markers) {
+      if (m.empty()) fail("hand segment \"" + s.name + "\" has an empty marker name");
+      if (!in_segment.insert(m).second) fail("hand segment \"" + s.name + "\" lists \"" + m + "\" twice");
+      claim(m, "hand segment \"" + s.name + "\"");
+    }
+  }
+  std::map<std::string, std::string> distance_owner;  // fingertips and palm
+  for (const auto* list : {&set.fingertips, &set.palm}) {
+    const std::string role = list == &set.fingertips ? "fingertips" : "palm";
+    for (const auto& m : *list) {
+      auto it = owner.find(m);
+      if (it != owner.end() && it->second.rfind("hand segment", 0) != 0)
+        fail("marker \"" + m + "\" is in both " + it->second + " and " + role +
+             " (fingertips and palm may only share markers with hand segments)");
+      auto [d, ok] = distance_owner.emplace(m, role);
+      if (!ok && d->second != role) fail("marker \"" + m + "\" is in both " + d->second + " and " + role);
+    }
+  }
+  std::set<std::string> throat_seen;
+  for (const auto& t : set.throat) {
+    if (t.marker.empty()) fail("throat has an empty marker name");
+    if (!throat_seen.insert(t.marker).second) fail("throat lists \"" + t.marker + "\" twice");
+  }
   // Every alias target must be unique across canonical names.
   std::map<std::string, std::string> alias_owner;
   for (const auto& [canon, alts] : set.aliases) {

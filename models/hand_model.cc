@@ -655,12 +655,28 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
   coords.conservativeResize(rows, Eigen::NoChange);
 
   if (progress) progress->Update("hand model: regression", 0.0);
-  model.shape = options.weighted_angle_pca
-                    ? FitWeightedShapeModel(angles, coords, options.angle_components, options.regression)
-                    : FitHandShapeModel(angles, coords, options.angle_components, options.regression);
   for (const auto& seg : layout.segments) {
     for (const char* what : {"flexion", "spread", "twist"}) model.angle_names.push_back(seg.name + "." + what);
   }
+  {
+    // Rank of the training angles (eigenvalues of their covariance above 1e-12 of the total): parameters
+    // beyond it have no variance (2-marker segments' twists are always 0, coupled joints move together).
+    const AnglePca all = FitAnglePca(angles, static_cast<int>(angles.cols()));
+    const double total = all.variances.sum();
+    int rank = 0;
+    for (Eigen::Index k = 0; k < all.variances.size(); ++k) rank += all.variances(k) > 1e-12 * total ? 1 : 0;
+    if (options.angle_components > rank) {
+      model.warnings.push_back("angle_components " + std::to_string(options.angle_components) +
+                               " exceeds the rank of the training angles (" + std::to_string(rank) + " of " +
+                               std::to_string(angles.cols()) + " angles vary independently): parameters " +
+                               std::to_string(rank + 1) + ".." + std::to_string(options.angle_components) +
+                               " have no variance; use at most " + std::to_string(rank));
+    }
+  }
+  HandRegressionOptions regression = options.regression;
+  regression.angle_names = model.angle_names;  // warnings name angles, not indices
+  model.shape = options.weighted_angle_pca ? FitWeightedShapeModel(angles, coords, options.angle_components, regression)
+                                           : FitHandShapeModel(angles, coords, options.angle_components, regression);
   const int p = model.num_parameters();
   model.param_scale.resize(p);
   for (int k = 0; k < p; ++k) {

@@ -102,6 +102,9 @@ struct HandModel {
   // prediction, which is only weakly tied to a folded finger's hidden segments.
   GaussianFill fill;
   ModelInfo info;
+  // Fit-time notes for the user (not stored in the model file), e.g. angle_components
+  // beyond the rank of the training angles. The regression's own are in shape.regression.
+  std::vector<std::string> warnings;
 
   int num_parameters() const { return shape.angle_pca.num_parameters(); }
   // Joint angles of one frame's hand markers (forearm frame, 3 × hand markers);
@@ -121,7 +124,8 @@ std::string CheckHandLayout(const HandLayout& layout);
 // forearm columns), hand markers in the forearm frame per take, frames with
 // every hand marker visible and a valid forearm pose, training-frame
 // selection over the hand markers (min_distance_mm), joint angles (frames
-// with a degenerate segment dropped), FitHandShapeModel, param_scale. Throws InvalidInput on a bad layout (parent
+// with a degenerate segment dropped), FitHandShapeModel, param_scale; a warning
+// when angle_components exceeds the rank of the training angles. Throws InvalidInput on a bad layout (parent
 // after child, too few markers, index out of range), a column mismatch, or
 // too few usable frames. Progress may cancel.
 HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>& takes,

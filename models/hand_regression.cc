@@ -11,9 +11,24 @@
 namespace csw {
 namespace {
 
-std::string AngleFeatureName(int column, int num_angles) {
-  const int angle = column % num_angles;
-  return std::string(column < num_angles ? "cos" : "sin") + "(angle " + std::to_string(angle) + ")";
+std::string AngleName(int angle, const std::vector<std::string>& names) {
+  return static_cast<size_t>(angle) < names.size() ? names[static_cast<size_t>(angle)]
+                                                   : "angle " + std::to_string(angle);
+}
+
+// One line for the dropped features: "a, b, cos(c)" (a bare name: both its cos and sin).
+std::string DroppedFeaturesWarning(const std::vector<bool>& dropped, int num_angles,
+                                   const std::vector<std::string>& names) {
+  std::string list;
+  int count = 0;
+  for (int i = 0; i < num_angles; ++i) {
+    const bool c = dropped[static_cast<size_t>(i)], s = dropped[static_cast<size_t>(num_angles + i)];
+    if (!c && !s) continue;
+    const std::string name = AngleName(i, names);
+    list += (count++ ? ", " : "") + (c && s ? name : std::string(c ? "cos(" : "sin(") + name + ")");
+  }
+  return std::to_string(count) + (count == 1 ? " angle" : " angles") +
+         " constant over the training frames, dropped from the regression (the intercept holds them): " + list;
 }
 
 }  // namespace
@@ -78,15 +93,18 @@ HandRegression FitHandRegression(const Eigen::MatrixXd& angles, const Eigen::Mat
   const Eigen::RowVectorXd g_mean = g.colwise().mean();
   g.rowwise() -= g_mean;
   std::vector<Eigen::Index> kept;
+  std::vector<bool> dropped(static_cast<size_t>(2 * n), false);
   Eigen::VectorXd scale(2 * n);
   for (Eigen::Index j = 0; j < 2 * n; ++j) {
     scale(j) = g.col(j).norm() / std::sqrt(nf);
     if (scale(j) < 1e-9) {
-      out.warnings.push_back(AngleFeatureName(static_cast<int>(j), static_cast<int>(n)) +
-                             " is constant over the training frames: dropped");
+      dropped[static_cast<size_t>(j)] = true;
     } else {
       kept.push_back(j);
     }
+  }
+  if (static_cast<Eigen::Index>(kept.size()) < 2 * n) {
+    out.warnings.push_back(DroppedFeaturesWarning(dropped, static_cast<int>(n), options.angle_names));
   }
   const Eigen::Index k = static_cast<Eigen::Index>(kept.size());
   Eigen::MatrixXd z(frames, k);

@@ -22,6 +22,8 @@ struct HandRegressionOptions {
   double ridge = 0;
   // Relative threshold below which a pivot of the decomposition counts as zero.
   double rank_tolerance = 1e-10;
+  // Names of the n angles for warnings ("thumb1.twist"); empty: "angle i" (0-based).
+  std::vector<std::string> angle_names;
 };
 
 struct HandRegression {
@@ -43,8 +45,9 @@ Eigen::RowVectorXd AngleFeatures(const Eigen::VectorXd& angles);
 // Fits frames × n angles to frames × D coordinates. Features are centred and
 // scaled to unit RMS before solving (the intercept is recovered afterwards);
 // a cos or sin column that is constant over the training frames (RMS
-// deviation < 1e-9, e.g. an angle that never moves) is dropped with a warning
-// — its effect is absorbed by the intercept. Throws InvalidInput on fewer than
+// deviation < 1e-9, e.g. an angle that never moves) is dropped — its effect is
+// absorbed by the intercept — and one warning line names them all: an angle
+// whose cos and sin are both dropped by its name, a lone feature as "cos(name)". Throws InvalidInput on fewer than
 // 2 frames, mismatched row counts, no coordinates, or a non-finite value
 // (drop frames with gaps first).
 HandRegression FitHandRegression(const Eigen::MatrixXd& angles, const Eigen::MatrixXd& coordinates,

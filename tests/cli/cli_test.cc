@@ -73,6 +73,17 @@ TEST(Cli, ExitCodesAndOneLineErrors) {
   EXPECT_EQ(Csw("export " + Q(dir / "x.h5") + " --take a --format xyz -o " + Q(dir / "o"), dir.path()).code, 1);
 }
 
+// `fit --help` sends the reader to the page that describes the configuration (docs/models.md), not to
+// the model file format.
+TEST(Cli, FitHelpPointsToTheConfigurationDocs) {
+  testing::TempDir dir;
+  const RunResult help = Csw("fit --help", dir.path());
+  EXPECT_EQ(help.code, 0);
+  EXPECT_NE(help.out.find("Model configuration JSON (docs/models.md, \"Configuration file\")"), std::string::npos)
+      << help.out;
+  EXPECT_EQ(help.out.find("model-format.md"), std::string::npos) << help.out;
+}
+
 struct RefRow {
   std::string file, status;
   int64_t points = 0, first_frame = 0, frames = 0, analog_channels = 0, subframes = 0, valid = 0;

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "core/error.h"
+#include "tests/testing/testing.h"
 
 namespace csw {
 namespace {
@@ -73,6 +74,69 @@ TEST(MarkerSet, RejectsBrokenDefinitionsWithReasons) {
     EXPECT_EQ(e.where().file, "bad.json");
     EXPECT_EQ(e.where().line.value_or(0), 3);
   }
+}
+
+std::string ParseErrorText(const std::string& json_text, const std::string& file) {
+  try {
+    ParseMarkerSet(json_text, file);
+  } catch (const InvalidInput& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+// A marker in two roles is refused at parse time, before any fit, with the file, the marker and both roles.
+TEST(MarkerSet, RefusesAMarkerInTwoRoles) {
+  EXPECT_EQ(ParseErrorText(R"({"head_cluster": ["FHL", "H2", "H3"], "face": ["LipU", "FHL"]})", "lab.json"),
+            "lab.json: marker set: marker \"FHL\" is in both head_cluster and face (a marker plays one role)");
+  EXPECT_EQ(ParseErrorText(R"({"face": ["LipU"], "throat": ["LipU"]})", "lab.json"),
+            "lab.json: marker set: marker \"LipU\" is in both face and throat (a marker plays one role)");
+  EXPECT_EQ(
+      ParseErrorText(R"({"head_cluster": ["H1", "H2", "H3"], "forearm_cluster": ["F1", "F2", "H3"]})", "lab.json"),
+      "lab.json: marker set: marker \"H3\" is in both head_cluster and forearm_cluster (a marker plays one "
+      "role)");
+  EXPECT_EQ(ParseErrorText(R"({"forearm_cluster": ["F1", "F2", "F3"],
+      "hand_segments": [{"name": "palm", "markers": ["F1", "P2", "P3"]}]})",
+                           "lab.json"),
+            "lab.json: marker set: marker \"F1\" is in both forearm_cluster and hand segment \"palm\" (a marker "
+            "plays one role)");
+}
+
+TEST(MarkerSet, RefusesAMarkerInTwoHandSegments) {
+  EXPECT_EQ(ParseErrorText(R"({"hand_segments": [
+      {"name": "palm", "markers": ["P1", "P2", "P3"]},
+      {"name": "index1", "parent": "palm", "markers": ["I1a", "I1b"]},
+      {"name": "index2", "parent": "index1", "markers": ["I1b", "I2b"]}]})",
+                           "hand.json"),
+            "hand.json: marker set: marker \"I1b\" is in both hand segment \"index1\" and hand segment "
+            "\"index2\" (a marker plays one role)");
+  EXPECT_EQ(ParseErrorText(R"({"hand_segments": [{"name": "palm", "markers": ["P1", "P2", "P1"]}]})", "hand.json"),
+            "hand.json: marker set: hand segment \"palm\" lists \"P1\" twice");
+}
+
+// fingertips and palm may repeat hand-segment markers (kSet's fingertip I1b is index1's), not other roles'.
+TEST(MarkerSet, FingertipsAndPalmShareOnlyHandSegmentMarkers) {
+  EXPECT_EQ(ParseErrorText(R"({"hand_segments": [{"name": "palm", "markers": ["P1", "P2", "P3"]}],
+      "palm": ["P1", "P2", "P3"], "fingertips": ["T1"]})",
+                           "hand.json"),
+            "(accepted)");
+  EXPECT_EQ(ParseErrorText(R"({"face": ["LipU"], "fingertips": ["LipU"]})", "hand.json"),
+            "hand.json: marker set: marker \"LipU\" is in both face and fingertips (fingertips and palm may only "
+            "share markers with hand segments)");
+  EXPECT_EQ(ParseErrorText(R"({"fingertips": ["T1"], "palm": ["T1"]})", "hand.json"),
+            "hand.json: marker set: marker \"T1\" is in both fingertips and palm");
+  EXPECT_EQ(ParseErrorText(R"({"throat": ["T1", "T1"]})", "t.json"), "t.json: marker set: throat lists \"T1\" twice");
+}
+
+// The marker sets shipped in datasets/markersets follow every rule, the one-role rule included.
+TEST(MarkerSet, ShippedMarkerSetsLoad) {
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(testing::SourceDir() / "datasets/markersets")) {
+    if (e.path().extension() != ".json") continue;
+    ++files;
+    EXPECT_NO_THROW(LoadMarkerSet(e.path().string())) << e.path();
+  }
+  EXPECT_GE(files, 1);
 }
 
 // LoadMarkerSet reads the file (core ReadTextFile) and names it in errors.

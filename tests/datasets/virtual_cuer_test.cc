@@ -102,6 +102,12 @@ TEST(VirtualCuer, MarkerSetDescribesEverySimulatedMarker) {
   EXPECT_EQ(set.AllMarkers().size(), 113u);
   EXPECT_EQ(set.throat.size(), 18u);
   EXPECT_EQ(set.hand_segments.size(), 16u);
+  // Every corpus kind's set keeps each marker in one role (ParseMarkerSet refuses overlaps): the
+  // shapes corpus has the head cluster + 7 forearm + 8 palm + 35 finger markers, the visemes corpus no hand.
+  EXPECT_EQ(ParseMarkerSet(MarkerSetToJson(cuer.MakeMarkerSet(CorpusKind::kShapes)), "shapes.json").AllMarkers().size(),
+            set.head_cluster.size() + 50u);
+  EXPECT_TRUE(
+      ParseMarkerSet(MarkerSetToJson(cuer.MakeMarkerSet(CorpusKind::kVisemes)), "visemes.json").hand_segments.empty());
   const SimulationResult& r = DefaultSentence();
   MarkerBinding b = BindMarkerSet(set, r.take.marker_names, true, r.take.name);
   EXPECT_TRUE(b.missing.empty());

@@ -40,7 +40,7 @@ TEST(ModelConfig, EverySection) {
   const ModelConfig c = ParseModelConfig(R"({"format": "csw-model-config", "version": 1, "markerset": "sets/a.json",
       "training": {"min_distance_mm": 1.5},
       "rigid": {"loss": "huber", "loss_scale_mm": 2.5, "motion_variance": 0.9},
-      "face": {"components": 4, "throat_weight_rounds": 2,
+      "face": {"throat_weight_rounds": 2,
                "steps": [{"name": "jaw", "markers": ["CHIN"], "components": 1}, {"markers": ["ULM", "LLM"]}]},
       "hand": {"angle_components": 20, "ridge": 0.5, "gaussian_fill": false}})",
                                          "/cfg/model.json");
@@ -49,7 +49,7 @@ TEST(ModelConfig, EverySection) {
   EXPECT_EQ(c.rigid.rigid.loss, RobustLoss::kHuber);
   EXPECT_DOUBLE_EQ(c.rigid.rigid.loss_scale_mm, 2.5);
   EXPECT_DOUBLE_EQ(c.rigid.motion_variance, 0.9);
-  EXPECT_EQ(c.face_components, 4);
+  EXPECT_EQ(ParseModelConfig(R"({"face": {"components": 4}})", "/cfg/model.json").face_components, 4);
   EXPECT_EQ(c.throat_weight_rounds, 2);
   ASSERT_EQ(c.face_steps.size(), 2u);
   EXPECT_EQ(c.face_steps[0].name, "jaw");
@@ -119,6 +119,16 @@ TEST(ModelConfig, PresetWithGroups) {
             "/cfg/model.json: face.preset must be \"seed\" or \"mother\"");
   EXPECT_EQ(ErrorOf(R"({"face": {"preset": "mother", "groups": {"jaw": ["A"]}, "steps": []}})"),
             "/cfg/model.json: face: give either preset or steps, not both");
+  // components with a preset or steps would be ignored: refused with the key.
+  EXPECT_EQ(ErrorOf(R"({"face": {"preset": "seed", "components": 4, "groups": {"jaw": ["A"]}}})"),
+            "/cfg/model.json: face.components cannot be combined with face.preset (they set each step's components; "
+            "see docs/models.md)");
+  EXPECT_EQ(ErrorOf(R"({"face": {"components": 4, "steps": [{"markers": ["A"]}]}})"),
+            "/cfg/model.json: face.components cannot be combined with face.steps (they set each step's components; "
+            "see docs/models.md)");
+  EXPECT_EQ(ErrorOf(R"({"face": {"preset": "mother", "residual_components": 2, "groups": {"jaw": ["A"]}}})"),
+            "/cfg/model.json: face.residual_components applies to face.preset \"seed\" only");
+  EXPECT_EQ(ErrorOf(R"({"face": {"components": 4}})"), "(no error)");
   // A group naming a marker the layout lacks: the file, the key and the marker.
   const ModelConfig bad = ParseModelConfig(R"({"face": {"preset": "mother", "groups": {"jaw": ["NOSE"]}}})", "m.json");
   try {

@@ -84,6 +84,9 @@ TEST(ModelReports, FitTextHandWithGapFillerAndWarnings) {
                     {"selected_frames", 90},
                     {"training_frames", 95},
                     {"training_rms_mm", 0.4567},
+                    {"warnings",
+                     {"1 angle constant over the training frames, dropped from the regression (the "
+                      "intercept holds them): thumb1.twist"}},
                     {"gaussian_fill", {{"frames", 400}, {"iterations", 12}}}}}};
   EXPECT_EQ(FitText(s),
             "fitted hand model(s) into m.h5 from 3 take(s)\n"
@@ -91,6 +94,8 @@ TEST(ModelReports, FitTextHandWithGapFillerAndWarnings) {
             "  hand gap filler: Gaussian, 400 training frames (incomplete ones included), 12 EM rounds\n"
             "    p1: 50.000 % (cumulated 50.000 %)\n"
             "    p2: 12.500 % (cumulated 62.500 %)\n"
+            "  hand warning: 1 angle constant over the training frames, dropped from the regression (the intercept "
+            "holds them): thumb1.twist\n"
             "  warning: something odd\n");
 }
 

@@ -485,6 +485,35 @@ TEST(HandModel, FitReproducesTheGeneratingModel) {
   EXPECT_GT(filled, 0);
 }
 
+// Angles from 2 PCA components of the flexions (spreads and twists always 0): the training angles have
+// rank 2, so a third component is warned about, and the constant angles are named in one line. The
+// markers are stored in single precision, so the measured spreads and twists are 0 only to ~1e-7 rad:
+// their sin varies by more than the 1e-9 threshold and is kept, their cos (1 - 5e-15) is constant.
+TEST(HandModel, WarnsAboutComponentsBeyondTheAnglesRankAndNamesConstantAngles) {
+  std::mt19937 rng(11);
+  const HingeHand h = MakeHingeHand(4, rng);
+  const Eigen::VectorXd mean = (Eigen::VectorXd(4) << 0.2, -0.3, 0.5, 0.1).finished();
+  const Eigen::MatrixXd c = Orthonormal(4, 2, rng);
+  std::vector<std::vector<Eigen::Matrix3Xd>> truth;
+  const std::vector<MarkerArray> takes = HingeTakes(h, mean, c, 2, 150, rng, &truth);
+  HandModelOptions opt;
+  opt.min_distance_mm = 0.5;
+  opt.angle_components = 2;
+  const HandModel exact = FitHandModel(h.layout, takes, opt);
+  EXPECT_TRUE(exact.warnings.empty());
+  ASSERT_GE(exact.shape.regression.warnings.size(), 1u);  // then the rank deficiency of 4 flexions on a plane
+  EXPECT_EQ(exact.shape.regression.warnings[0],
+            "8 angles constant over the training frames, dropped from the regression (the intercept holds them): "
+            "cos(seg0.spread), cos(seg0.twist), cos(seg1.spread), cos(seg1.twist), cos(seg2.spread), "
+            "cos(seg2.twist), cos(seg3.spread), cos(seg3.twist)");
+  opt.angle_components = 3;
+  const HandModel model = FitHandModel(h.layout, takes, opt);
+  ASSERT_EQ(model.warnings.size(), 1u);
+  EXPECT_EQ(model.warnings[0],
+            "angle_components 3 exceeds the rank of the training angles (2 of 12 angles vary independently): "
+            "parameters 3..3 have no variance; use at most 2");
+}
+
 TEST(HandModel, BadLayoutsAndColumnMismatchesAreRejected) {
   std::mt19937 rng(5);
   const HingeHand h = MakeHingeHand(3, rng);

@@ -97,13 +97,33 @@ TEST(HandRegression, ConstantAngleIsDroppedAndStillPredicts) {
     HandRegressionOptions opt;
     opt.ridge = ridge;
     const HandRegression reg = FitHandRegression(angles, y, opt);
-    EXPECT_EQ(reg.warnings.size(), 2u);  // cos and sin of angle 2
+    ASSERT_EQ(reg.warnings.size(), 1u);  // one line: cos and sin of angle 2
+    EXPECT_EQ(reg.warnings[0],
+              "1 angle constant over the training frames, dropped from the regression (the intercept holds them): "
+              "angle 2");
     EXPECT_EQ(reg.rank, 6);
     EXPECT_EQ(reg.coefficients.row(3).norm(), 0.0);
     Eigen::MatrixXd test = RandomAngles(50, 4, rng);
     test.col(2).setConstant(0.7);
     EXPECT_LT((reg.PredictFrames(test) - Features(test) * truth).cwiseAbs().maxCoeff(), 1e-8) << "ridge " << ridge;
   }
+}
+
+// The warning names angles by the names given, and a lone constant feature by cos(name) or sin(name).
+TEST(HandRegression, DroppedFeaturesWarningNamesTheAngles) {
+  std::mt19937 rng(15);
+  Eigen::MatrixXd angles = RandomAngles(100, 4, rng);
+  angles.col(1).setZero();  // never moves: cos and sin constant
+  // +-pi/3: cos is 0.5 in every frame, sin varies.
+  for (Eigen::Index f = 0; f < angles.rows(); ++f) angles(f, 3) = (f % 2 ? 1.0 : -1.0) * std::numbers::pi / 3.0;
+  const Eigen::MatrixXd y = Features(angles) * RandomMatrix(9, 6, 10.0, rng);
+  HandRegressionOptions opt;
+  opt.angle_names = {"thumb1.flexion", "thumb1.twist", "index1.flexion", "index1.spread"};
+  const HandRegression reg = FitHandRegression(angles, y, opt);
+  ASSERT_EQ(reg.warnings.size(), 1u);
+  EXPECT_EQ(reg.warnings[0],
+            "2 angles constant over the training frames, dropped from the regression (the intercept holds them): "
+            "thumb1.twist, cos(index1.spread)");
 }
 
 TEST(HandRegression, DuplicatedAngleGivesMinimumNormExactFit) {

@@ -201,7 +201,7 @@ class FitCommand : public Command {
                      "or a glob pattern ('sentence_0[1-5]*'); \\ escapes * ? [ ] @ , (docs/cli.md); "
                      "default every take but fill versions");
     sub_->add_option("--markerset", options_.markerset, "Marker-set JSON naming the clusters, face and hand markers");
-    sub_->add_option("--config", options_.config, "Model configuration JSON (docs/model-format.md)");
+    sub_->add_option("--config", options_.config, "Model configuration JSON (docs/models.md, \"Configuration file\")");
     sub_->add_option("--figures", options_.figures, "Folder for PNG and SVG figures");
     sub_->add_option("-o,--output", options_.output, "Model file (HDF5)")->required();
     sub_->add_flag("--json", json_, "Print the fit summary as JSON");

@@ -212,11 +212,13 @@ void FitHand(const FitContext& x, ModelFile* update) {
   HandModel m = FitHandModel(layout, x.Load(names), ho, &x.progress);
   WithProvenance(x.info, &m.info);
   WithProvenance(x.info, &m.forearm.info);
+  std::vector<std::string> warnings = m.warnings;  // shown by FitText as well as in the JSON
+  warnings.insert(warnings.end(), m.shape.regression.warnings.begin(), m.shape.regression.warnings.end());
   x.summary["hand"] = {{"parameters", m.num_parameters()},
                        {"angles", m.angle_names.size()},
                        {"variance_explained", m.shape.angle_pca.variance_explained},
                        {"regression_rank", m.shape.regression.rank},
-                       {"warnings", m.shape.regression.warnings},
+                       {"warnings", warnings},
                        {"training_frames", m.info.training_frames},
                        {"selected_frames", m.info.selected_frames},
                        {"training_rms_mm", m.info.training_rms_mm}};

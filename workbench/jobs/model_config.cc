@@ -122,6 +122,16 @@ ModelConfig ParseModelConfig(const std::string& text, const std::string& path) {
       }
       if (!c.face_preset.empty()) throw ConfigError(path, "face: give either preset or steps, not both");
     }
+    // components sizes the one-step model only; a preset or explicit steps set every step's components,
+    // so a components given with them would be silently ignored: refuse it (docs/models.md).
+    if (f.contains("components") && (!c.face_preset.empty() || f.contains("steps"))) {
+      throw ConfigError(path, std::string("face.components cannot be combined with face.") +
+                                  (c.face_preset.empty() ? "steps" : "preset") +
+                                  " (they set each step's components; see docs/models.md)");
+    }
+    if (f.contains("residual_components") && c.face_preset != "seed") {
+      throw ConfigError(path, "face.residual_components applies to face.preset \"seed\" only");
+    }
   }
   if (j.contains("hand")) {
     const json& h = j["hand"];

@@ -88,6 +88,7 @@ std::string FitText(const json& s) {
         << " EM rounds\n";
     }
     variance(json(), h["variance_explained"]);
+    for (const auto& w : h.value("warnings", json::array())) o << "  hand warning: " << w.get<std::string>() << "\n";
   }
   for (const auto& f : s["figures"]) o << "  figure: " << f.get<std::string>() << "\n";
   if (s.contains("warnings")) {
