@@ -55,10 +55,16 @@ struct SwapOptions {
   double jump_noise_factor = 10.0;
   double max_bridge_s = 0.25;              // a label's segment before/after a break is looked for this far
   double max_cost_ratio = 0.35;            // swapped links' error ≤ this × the unswapped links' error
-  double max_reference_sd_mm = 2.5;        // reference markers: distance to a label this steady (1.4826 × MAD)
-  double max_swapped_misfit = 24.0;        // swapped segments: mean z² of the distances to the references
-  double min_evidence = 20.0;              // |log-likelihood ratio| of a segment's state evidence needed to decide it
-  double min_unconfirmed_evidence = 12.0;  // ... for an interval neither of whose exchanges is seen
+  double max_reference_sd_mm = 2.0;  // rigid references: distance to a marker this steady (90th percentile / 1.645)
+  int references = 3;                // at most this many rigid references per marker of the pair
+  double reference_clip = 8.0;       // a reference's log-likelihood term per frame is within ±this
+  double evidence_weight = 0.5;      // segment evidence (sum over frames of the mean term) × this
+  double confirmed_bonus = 10.0;     // state change at a confirmed exchange (log-odds)
+  double open_penalty = 10.0;        // ... at an open boundary (a label without a past within the bridge)
+  double broken_penalty = 20.0;      // ... at a break where the swapped links do not fit either
+  double start_penalty = 40.0;       // swapped from the first frame (the take is assumed labelled right at its start)
+  double min_run_evidence = 2.0;     // a swapped run's mean evidence per informative frame (unless both ends confirmed)
+  double min_one_sided_evidence = 100.0;  // ... when only one marker of the pair has rigid references
   int64_t min_frames = 4;                  // shorter intervals are not reported (jitter)
   double min_confidence = 0.3;             // swaps below are not reported
 };
