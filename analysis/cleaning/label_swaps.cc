@@ -198,7 +198,17 @@ bool RigidReference(const MarkerArray& m, int a, int b, int c, int label, double
   std::nth_element(dev.begin(), q, dev.end());
   *distance = centre;
   *sd = *q / 1.645;
-  return true;
+  // The marker's own label must be the one at that distance most of the time
+  // (a swap exchanges a minority of the frames).
+  const double tol = 3.0 * std::max(*sd, 1.0);
+  size_t own_fits = 0, other_fits = 0;
+  const std::vector<double>& mine = label == 0 ? both_a : both_b;
+  const std::vector<double>& theirs = label == 0 ? both_b : both_a;
+  for (size_t i = 0; i < seen.size(); ++i) {
+    if (!std::isnan(mine[i]) && std::abs(mine[i] - centre) <= tol) ++own_fits;
+    if (!std::isnan(theirs[i]) && std::abs(theirs[i] - centre) <= tol) ++other_fits;
+  }
+  return own_fits >= 2 * other_fits && own_fits >= 20;
 }
 
 // Evidence that a label sits at a rigid reference's distance: log of a
@@ -222,6 +232,8 @@ std::vector<std::pair<int, int>> NeighbourPairs(const MarkerArray& markers, int 
       d.clear();
       for (int64_t f = 0; f < frames; f += step)
         if (markers.Visible(f, i) && markers.Visible(f, j)) d.push_back((At(markers, f, i) - At(markers, f, j)).norm());
+      if (const char* e = std::getenv("CSW_SWAP_DEBUG"); e != nullptr && std::to_string(i) + "-" + std::to_string(j) == e)
+        std::fprintf(stderr, "neighbour %d-%d: %zu samples\n", i, j, d.size());
       if (d.size() < 5) continue;
       auto q = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 10);
       std::nth_element(d.begin(), q, d.end());
@@ -234,6 +246,10 @@ std::vector<std::pair<int, int>> NeighbourPairs(const MarkerArray& markers, int 
     const double* row = &median[static_cast<size_t>(i * nm)];
     std::sort(order.begin(), order.end(), [&](int x, int y) { return row[x] < row[y]; });
     int taken = 0;
+    if (const char* e = std::getenv("CSW_SWAP_DEBUG"); e != nullptr)
+      for (size_t r = 0; r < order.size(); ++r)
+        if (std::to_string(std::min(i, order[r])) + "-" + std::to_string(std::max(i, order[r])) == e)
+          std::fprintf(stderr, "neighbour of %d rank %zu dist %.1f\n", i, r, row[order[r]]);
     for (int j : order) {
       if (taken >= neighbours || !(row[j] <= max_distance_mm)) break;
       if (j == i) continue;
@@ -343,6 +359,7 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
                      ap.ok, (long long)ap.frame, an.ok, (long long)an.frame, bp.ok, (long long)bp.frame, bn.ok,
                      (long long)bn.frame, u_min, s_max, x.kind);
     }
+    if (dbg) std::fprintf(stderr, "pair %d-%d: %zu breaks %zu boundaries\n", a, b, candidates.size(), boundaries.size());
     if (boundaries.empty()) continue;
     // Rigid references of either marker among the pair's neighbours.
     std::set<int> near = neighbours_of[static_cast<size_t>(a)];
@@ -378,6 +395,8 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
         d.open_ended = i + 1 >= fits.size();
         d.end_frame = d.open_ended ? frames : fits[i + 1];
         d.confidence = d.open_ended ? 0.5 : 1.0;
+        // Unpaired, an exchange is only reported for pairs the caller named.
+        if (d.open_ended && options.pairs.empty()) continue;
         if (d.confidence >= options.min_confidence) report.swaps.push_back(d);
       }
       continue;

@@ -46,7 +46,7 @@ struct SwapOptions {
   // Candidate pairs (columns). Explicit pairs win; else every pair inside each group; else automatic.
   std::vector<std::pair<int, int>> pairs;
   std::vector<std::vector<int>> groups;
-  int neighbours = 12;                  // automatic: each marker's nearest markers by median distance ...
+  int neighbours = 16;                  // automatic: each marker's nearest markers by median distance ...
   double max_pair_distance_mm = 150.0;  // ... no farther than this on median
   // Break threshold (mm): > 0 fixed; 0 = max(jump_floor_mm, jump_noise_factor × robust σ of the take's
   // per-coordinate constant-velocity residuals).
