@@ -5,8 +5,6 @@
 #include <array>
 #include <cmath>
 #include <set>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 
 #include "core/error.h"
@@ -163,7 +161,6 @@ struct Rigid {
 
 bool RigidReference(const MarkerArray& m, int a, int b, int c, int label, double* distance, double* sd) {
   const int64_t frames = m.frames();
-  const int lab[2] = {a, b};
   std::vector<double> own, both_a, both_b;
   std::vector<int64_t> seen;
   for (int64_t f = 0; f < frames; ++f) {
@@ -177,7 +174,6 @@ bool RigidReference(const MarkerArray& m, int a, int b, int c, int label, double
     const double d = label == 0 ? both_a.back() : both_b.back();
     if (!std::isnan(d)) own.push_back(d);
   }
-  (void)lab;
   if (own.size() < 20) return false;
   double centre = Median(&own);
   std::vector<double> dev;
@@ -232,8 +228,6 @@ std::vector<std::pair<int, int>> NeighbourPairs(const MarkerArray& markers, int 
       d.clear();
       for (int64_t f = 0; f < frames; f += step)
         if (markers.Visible(f, i) && markers.Visible(f, j)) d.push_back((At(markers, f, i) - At(markers, f, j)).norm());
-      if (const char* e = std::getenv("CSW_SWAP_DEBUG"); e != nullptr && std::to_string(i) + "-" + std::to_string(j) == e)
-        std::fprintf(stderr, "neighbour %d-%d: %zu samples\n", i, j, d.size());
       if (d.size() < 5) continue;
       auto q = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 10);
       std::nth_element(d.begin(), q, d.end());
@@ -246,10 +240,6 @@ std::vector<std::pair<int, int>> NeighbourPairs(const MarkerArray& markers, int 
     const double* row = &median[static_cast<size_t>(i * nm)];
     std::sort(order.begin(), order.end(), [&](int x, int y) { return row[x] < row[y]; });
     int taken = 0;
-    if (const char* e = std::getenv("CSW_SWAP_DEBUG"); e != nullptr)
-      for (size_t r = 0; r < order.size(); ++r)
-        if (std::to_string(std::min(i, order[r])) + "-" + std::to_string(std::max(i, order[r])) == e)
-          std::fprintf(stderr, "neighbour of %d rank %zu dist %.1f\n", i, r, row[order[r]]);
     for (int j : order) {
       if (taken >= neighbours || !(row[j] <= max_distance_mm)) break;
       if (j == i) continue;
@@ -315,8 +305,6 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
   };
 
   for (auto [a, b] : report.candidate_pairs) {
-    const char* dbg_env = std::getenv("CSW_SWAP_DEBUG");
-    const bool dbg = dbg_env != nullptr && std::to_string(a) + "-" + std::to_string(b) == dbg_env;
     const Track& ta = track(a);
     const Track& tb = track(b);
     std::vector<int64_t> candidates;
@@ -354,12 +342,7 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
       x.frame = s;
       x.kind = fits ? Boundary::kConfirmed : (ns == 0 || !ap.ok || !bp.ok) ? Boundary::kOpen : Boundary::kBroken;
       boundaries.push_back(x);
-      if (dbg)
-        std::fprintf(stderr, " brk %lld ap%d@%lld an%d@%lld bp%d@%lld bn%d@%lld u=%.1f s=%.1f kind=%d\n", (long long)s,
-                     ap.ok, (long long)ap.frame, an.ok, (long long)an.frame, bp.ok, (long long)bp.frame, bn.ok,
-                     (long long)bn.frame, u_min, s_max, x.kind);
     }
-    if (dbg) std::fprintf(stderr, "pair %d-%d: %zu breaks %zu boundaries\n", a, b, candidates.size(), boundaries.size());
     if (boundaries.empty()) continue;
     // Rigid references of either marker among the pair's neighbours.
     std::set<int> near = neighbours_of[static_cast<size_t>(a)];
@@ -379,9 +362,6 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
       if (mine.size() > static_cast<size_t>(options.references)) mine.resize(static_cast<size_t>(options.references));
       refs.insert(refs.end(), mine.begin(), mine.end());
     }
-    if (dbg)
-      for (const Rigid& r : refs)
-        std::fprintf(stderr, " ref %d of %c: %.1f sd %.2f\n", r.marker, r.label ? 'b' : 'a', r.distance, r.sd);
     if (refs.empty()) {
       // No steady reference: the exchanges whose swapped links fit, paired in order.
       std::vector<int64_t> fits;
@@ -464,10 +444,6 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
     std::vector<int> state(n);
     state[n - 1] = score[1] > score[0] ? 1 : 0;
     for (size_t i = n - 1; i > 0; --i) state[i - 1] = from[i][state[i]];
-    if (dbg)
-      for (size_t i = 0; i < n; ++i)
-        std::fprintf(stderr, "  seg [%lld,%lld) ev=%.1f inf=%lld state=%d\n", (long long)edges[i],
-                     (long long)edges[i + 1], evidence[i], (long long)informative[i], state[i]);
     // Runs of the swapped state; the reference fit is judged over the whole run.
     for (size_t i = 0; i < n;) {
       if (state[i] == 0) {
@@ -495,11 +471,13 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
       const bool confirmed_both = i > 0 && j < n && boundaries[i - 1].kind == Boundary::kConfirmed &&
                                   boundaries[j - 1].kind == Boundary::kConfirmed;
       // Each marker's references must agree; one marker's alone must be strong.
-      const bool agree = (!sides[0] || side[0] > 0.0) && (!sides[1] || side[1] > 0.0);
+      // A marker hidden over the whole run gives no evidence (0): enough when an
+      // end of the run is a confirmed exchange.
+      const bool confirmed_end = (i > 0 && boundaries[i - 1].kind == Boundary::kConfirmed) ||
+                                 (j < n && boundaries[j - 1].kind == Boundary::kConfirmed);
+      const bool agree = (!sides[0] || side[0] > 0.0 || (side[0] == 0.0 && confirmed_end)) &&
+                         (!sides[1] || side[1] > 0.0 || (side[1] == 0.0 && confirmed_end));
       const double needed = sides[0] && sides[1] ? options.min_run_evidence : options.min_one_sided_evidence;
-      if (dbg)
-        std::fprintf(stderr, "  run [%lld,%lld) ev %.2f sides %.1f %.1f\n", (long long)d.first_frame,
-                     (long long)d.end_frame, d.evidence, side[0], side[1]);
       if ((confirmed_both || (agree && d.evidence >= needed)) && d.confidence >= options.min_confidence)
         report.swaps.push_back(d);
       i = j;

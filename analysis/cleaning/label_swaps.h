@@ -53,8 +53,8 @@ struct SwapOptions {
   double jump_mm = 0.0;
   double jump_floor_mm = 4.0;
   double jump_noise_factor = 10.0;
-  double max_bridge_s = 0.25;              // a label's segment before/after a break is looked for this far
-  double max_cost_ratio = 0.35;            // swapped links' error ≤ this × the unswapped links' error
+  double max_bridge_s = 0.25;        // a label's segment before/after a break is looked for this far
+  double max_cost_ratio = 0.35;      // swapped links' error ≤ this × the unswapped links' error
   double max_reference_sd_mm = 2.0;  // rigid references: distance to a marker this steady (90th percentile / 1.645)
   int references = 3;                // at most this many rigid references per marker of the pair
   double reference_clip = 8.0;       // a reference's log-likelihood term per frame is within ±this
@@ -65,8 +65,8 @@ struct SwapOptions {
   double start_penalty = 40.0;       // swapped from the first frame (the take is assumed labelled right at its start)
   double min_run_evidence = 2.0;     // a swapped run's mean evidence per informative frame (unless both ends confirmed)
   double min_one_sided_evidence = 100.0;  // ... when only one marker of the pair has rigid references
-  int64_t min_frames = 4;                  // shorter intervals are not reported (jitter)
-  double min_confidence = 0.3;             // swaps below are not reported
+  int64_t min_frames = 4;                 // shorter intervals are not reported (jitter)
+  double min_confidence = 0.3;            // swaps below are not reported
 };
 
 struct DetectedSwap {

@@ -181,34 +181,6 @@ Tally RunCuer(bool swaps, int takes, int first_take) {
   for (int t = first_take; t < first_take + takes; ++t) {
     SimulationResult r = CuerTake(cuer, t);
     ++tally.takes;
-    {  // DEBUG
-      const char* dt = std::getenv("CSW_SWAP_DEBUG_TAKE");
-      if (dt != nullptr && std::atoi(dt) == t && !r.swaps.empty()) {
-        const auto& s0 = r.swaps[0];
-        const int a0 = std::min(s0.marker_a, s0.marker_b), b0 = std::max(s0.marker_a, s0.marker_b);
-        setenv("CSW_SWAP_DEBUG", (std::to_string(a0) + "-" + std::to_string(b0)).c_str(), 1);
-        if (const char* pn = std::getenv("CSW_SWAP_DEBUG_NAMES")) {
-          const std::string x(pn);
-          const std::string n1 = x.substr(0, x.find('-')), n2 = x.substr(x.find('-') + 1);
-          const auto& nm = r.take.marker_names;
-          const int c1 = int(std::find(nm.begin(), nm.end(), n1) - nm.begin());
-          const int c2 = int(std::find(nm.begin(), nm.end(), n2) - nm.begin());
-          setenv("CSW_SWAP_DEBUG", (std::to_string(std::min(c1, c2)) + "-" + std::to_string(std::max(c1, c2))).c_str(), 1);
-        }
-        std::cerr << "take " << t << " injected " << a0 << "-" << b0 << " [" << s0.first_frame << "," << s0.end_frame
-                  << ") a vis:";
-        for (int64_t f = s0.first_frame - 3; f < s0.first_frame + 3; ++f) std::cerr << r.take.markers.Visible(f, a0);
-        std::cerr << " b vis:";
-        for (int64_t f = s0.first_frame - 3; f < s0.first_frame + 3; ++f) std::cerr << r.take.markers.Visible(f, b0);
-        std::cerr << " | end a:";
-        for (int64_t f = s0.end_frame - 3; f < s0.end_frame + 3; ++f) std::cerr << r.take.markers.Visible(f, a0);
-        std::cerr << " b:";
-        for (int64_t f = s0.end_frame - 3; f < s0.end_frame + 3; ++f) std::cerr << r.take.markers.Visible(f, b0);
-        std::cerr << "\n";
-      } else {
-        unsetenv("CSW_SWAP_DEBUG");
-      }
-    }
     SwapReport rep = DetectLabelSwaps(r.take.markers, r.take.rate_hz);
     std::vector<bool> used(rep.swaps.size(), false);
     std::vector<LabelSwap> found;
@@ -222,7 +194,6 @@ Tally RunCuer(bool swaps, int takes, int first_take) {
         const int end_error = SeenBetween(r.take.markers, a, b, d.end_frame, s.end_frame);
         if (start_error > kFrameTolerance || end_error > kFrameTolerance) continue;
         used[i] = true;
-        std::cout << "take " << t << ": found ev " << d.evidence << " conf " << d.confidence << "\n";  // DEBUG
         ++tally.found;
         found.push_back(s);
         tally.max_start_error = std::max(tally.max_start_error, start_error);
