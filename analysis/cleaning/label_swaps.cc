@@ -256,6 +256,12 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
       !(options.max_bridge_s > 0.0) || !(options.max_cost_ratio > 0.0 && options.max_cost_ratio < 1.0))
     throw InvalidInput(
         "label swaps: jump thresholds must be ≥ 0, the noise factor and bridge > 0, the cost ratio in (0, 1)");
+  if (options.references < 1 || !(options.reference_clip > 0.0) || !(options.evidence_weight > 0.0) ||
+      options.confirmed_bonus < 0.0 || options.open_penalty < 0.0 || options.broken_penalty < 0.0 ||
+      options.start_penalty < 0.0 || !(options.max_reference_sd_mm > 0.0))
+    throw InvalidInput(
+        "label swaps: references must be ≥ 1, the reference clip, evidence weight and reference spread > 0, the "
+        "state-change bonus and penalties ≥ 0");
   const int nm = static_cast<int>(markers.markers());
   const int64_t frames = markers.frames();
   auto check = [&](int c) {
@@ -477,8 +483,9 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
                                  (j < n && boundaries[j - 1].kind == Boundary::kConfirmed);
       const bool agree = (!sides[0] || side[0] > 0.0 || (side[0] == 0.0 && confirmed_end)) &&
                          (!sides[1] || side[1] > 0.0 || (side[1] == 0.0 && confirmed_end));
-      const double needed = sides[0] && sides[1] ? options.min_run_evidence : options.min_one_sided_evidence;
-      if ((confirmed_both || (agree && d.evidence >= needed)) && d.confidence >= options.min_confidence)
+      const bool sided = (sides[0] && sides[1]) || options.one_sided;
+      if ((confirmed_both || (sided && agree && d.evidence >= options.min_run_evidence)) &&
+          d.confidence >= options.min_confidence)
         report.swaps.push_back(d);
       i = j;
     }
