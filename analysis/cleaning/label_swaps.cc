@@ -450,6 +450,19 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
     std::vector<int> state(n);
     state[n - 1] = score[1] > score[0] ? 1 : 0;
     for (size_t i = n - 1; i > 0; --i) state[i - 1] = from[i][state[i]];
+    // A swapped run also takes the neighbouring segments the references find
+    // swapped (positive evidence) but the boundary costs kept out: a marker seen
+    // for a frame or two in a gap around an exchange.
+    for (size_t i = 1; i < n; ++i)
+      if (state[i] == 1 && state[i - 1] == 0)
+        for (size_t k = i - 1;
+             k > 0 && state[k] == 0 && evidence[k] > 0.0 && informative[k] <= options.max_absorbed_frames; --k)
+          state[k] = 1;
+    for (size_t i = n - 1; i > 0; --i)
+      if (state[i - 1] == 1 && state[i] == 0)
+        for (size_t k = i; k < n && state[k] == 0 && evidence[k] > 0.0 && informative[k] <= options.max_absorbed_frames;
+             ++k)
+          state[k] = 1;
     // Runs of the swapped state; the reference fit is judged over the whole run.
     for (size_t i = 0; i < n;) {
       if (state[i] == 0) {

@@ -76,7 +76,9 @@ struct SwapOptions {
   double open_penalty = 10.0;        // ... at an open boundary (a label without a past within the bridge)
   double broken_penalty = 20.0;      // ... at a break where the swapped links do not fit either
   double start_penalty = 40.0;       // swapped from the first frame (the take is assumed labelled right at its start)
-  double min_run_evidence = 2.0;     // a swapped run's mean evidence per informative frame (unless both ends confirmed)
+  int64_t max_absorbed_frames =
+      3;  // a run takes in next segments with positive evidence and at most this many seen frames
+  double min_run_evidence = 2.0;  // a swapped run's mean evidence per informative frame (unless both ends confirmed)
   bool one_sided = false;       // accept runs when only one marker of the pair has rigid references (min_run_evidence)
   int64_t min_frames = 4;       // shorter intervals are not reported (jitter)
   double min_confidence = 0.3;  // swaps below are not reported
