@@ -207,6 +207,18 @@ bool RigidReference(const MarkerArray& m, int a, int b, int c, int label, double
   return own_fits >= 2 * other_fits && own_fits >= 20;
 }
 
+// 1.4826 × MAD of the distance between markers p and q (infinite when seen
+// together in fewer than 20 frames).
+double OwnSpread(const MarkerArray& m, int p, int q) {
+  std::vector<double> d;
+  for (int64_t f = 0; f < m.frames(); ++f)
+    if (m.Visible(f, p) && m.Visible(f, q)) d.push_back((At(m, f, p) - At(m, f, q)).norm());
+  if (d.size() < 20) return INFINITY;
+  const double centre = Median(&d);
+  for (double& v : d) v = std::abs(v - centre);
+  return 1.4826 * Median(&d);
+}
+
 // Evidence that a label sits at a rigid reference's distance: log of a
 // Gaussian-with-outliers likelihood over the outlier floor, in [0, clip].
 double Fit(double d, const Rigid& r, double floor_sd, double clip) {
@@ -300,6 +312,7 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
     neighbours_of[static_cast<size_t>(a)].insert(b);
     neighbours_of[static_cast<size_t>(b)].insert(a);
   }
+  std::vector<float> own_spread(static_cast<size_t>(nm) * static_cast<size_t>(nm), -1.0f);
   std::vector<Track> tracks(static_cast<size_t>(nm));
   std::vector<uint8_t> made(static_cast<size_t>(nm), 0);
   auto track = [&](int k) -> const Track& {
@@ -358,6 +371,12 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
       std::vector<Rigid> mine;
       for (int c : near) {
         if (c == a || c == b) continue;
+        // Quick screen (cached per marker pair): the own label's robust spread
+        // (1.4826 × MAD, unmoved by a swap over a minority of the frames).
+        float& screen =
+            own_spread[static_cast<size_t>(label == 0 ? a : b) * static_cast<size_t>(nm) + static_cast<size_t>(c)];
+        if (screen < 0.0f) screen = static_cast<float>(OwnSpread(markers, label == 0 ? a : b, c));
+        if (!(screen <= options.max_reference_sd_mm)) continue;
         Rigid r;
         r.marker = c;
         r.label = label;

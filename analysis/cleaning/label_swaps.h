@@ -20,7 +20,9 @@
 //     relative vector flips sign; open when a label has no past within the
 //     bridge; broken otherwise (both jump, the swapped links do not fit either).
 //  3. Rigid references: markers whose distance to a (or to b) stays fixed over
-//     the take. Judged swap-invariantly: each frame by whichever label is nearer
+//     the take (screened first by the own label's 1.4826 × MAD of distance,
+//     which a swap over a minority of the frames hardly moves). Judged
+//     swap-invariantly: each frame by whichever label is nearer
 //     that distance (90th percentile of the deviation / 1.645 ≤
 //     max_reference_sd_mm), and the marker's own label must be the one at that
 //     distance in at least twice as many frames as the other label.
