@@ -36,7 +36,7 @@
 //     (confirmed_bonus, open_penalty, broken_penalty; start_penalty for a take
 //     swapped from its first frame).
 //  5. Each swapped run is judged as a whole: both markers' references must
-//     agree (a marker hidden over the whole run, giving no evidence, is accepted
+//     agree (a marker whose references give exactly no evidence is accepted
 //     when an end of the run is a confirmed exchange) and the mean evidence per
 //     informative frame must reach min_run_evidence (runs where only one marker
 //     has references are dropped unless one_sided); a run between two confirmed exchanges is
