@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 #include <string>
@@ -123,11 +124,14 @@ double LinkError(const End& pre, const End& post) {
   return n == 0 ? (post.x - pre.x).norm() : sum / n;
 }
 
-// A boundary of a pair's state: confidence 1 for an exchange seen in the
-// trajectories, 0 for a break only the state evidence can decide.
-struct Exchange {
+// A boundary of a pair's state: a break where neither label continues its own
+// trajectory. Confirmed: the swapped links fit (an exchange seen in the
+// trajectories); open: a label has no past within the bridge; broken: both
+// labels jump but the swapped links do not fit either.
+struct Boundary {
+  enum Kind { kConfirmed, kOpen, kBroken };
   int64_t frame = 0;
-  double confidence = 0.0;
+  Kind kind = kBroken;
 };
 
 double RobustResidualSigma(const MarkerArray& m) {
@@ -145,91 +149,81 @@ double RobustResidualSigma(const MarkerArray& m) {
   return 1.4826 * Median(&values);
 }
 
-// Reference markers of a candidate pair: for each label, the markers (not of the
-// pair) whose distance to it varies least over the take (median and 1.4826 ×
-// MAD), with the other label's distance to the same markers.
-struct Reference {
+// Rigid references (swap-invariant): a marker c whose distance to one of the
+// pair's markers stays at m over the take. The pair's labels may be exchanged
+// over part of the take, so each frame is judged by whichever label is nearer
+// m: the spread of that deviation is the same with or without a swap.
+struct Rigid {
   int marker = 0;
-  double own[2] = {0, 0}, own_sd[2] = {1, 1};  // distance of label a (0) / b (1) to the marker
-};
-struct PairReference {
-  std::vector<Reference> refs;
+  int label = 0;  // 0: rigid with marker a, 1: with marker b
+  double distance = 0.0, sd = 1.0;
 };
 
-void DistanceStats(const MarkerArray& m, int p, int q, double* median, double* sd, int* count) {
+bool RigidReference(const MarkerArray& m, int a, int b, int c, int label, double* distance, double* sd) {
   const int64_t frames = m.frames();
-  const int64_t step = std::max<int64_t>(1, frames / 600);
-  std::vector<double> d;
-  for (int64_t f = 0; f < frames; f += step)
-    if (m.Visible(f, p) && m.Visible(f, q)) d.push_back((At(m, f, p) - At(m, f, q)).norm());
-  *count = static_cast<int>(d.size());
-  *median = Median(&d);
-  for (double& v : d) v = std::abs(v - *median);
-  *sd = std::max(1.0, 1.4826 * Median(&d));
-}
-
-PairReference MakeReference(const MarkerArray& m, int a, int b, const std::set<int>& near, double max_sd) {
-  struct Stat {
-    int c;
-    double med, sd;
-  };
-  std::vector<Stat> sa, sb;
-  for (int c : near) {
-    if (c == a || c == b) continue;
-    double med, sd;
-    int n;
-    DistanceStats(m, a, c, &med, &sd, &n);
-    if (n >= 20) sa.push_back({c, med, sd});
-    DistanceStats(m, b, c, &med, &sd, &n);
-    if (n >= 20) sb.push_back({c, med, sd});
+  std::vector<double> own, both_a, both_b;
+  std::vector<int64_t> seen;
+  for (int64_t f = 0; f < frames; ++f) {
+    if (!m.Visible(f, c)) continue;
+    const Vector3d x = At(m, f, c);
+    const bool va = m.Visible(f, a), vb = m.Visible(f, b);
+    if (!va && !vb) continue;
+    seen.push_back(f);
+    both_a.push_back(va ? (At(m, f, a) - x).norm() : NAN);
+    both_b.push_back(vb ? (At(m, f, b) - x).norm() : NAN);
+    const double d = label == 0 ? both_a.back() : both_b.back();
+    if (!std::isnan(d)) own.push_back(d);
   }
-  auto by_sd = [](const Stat& x, const Stat& y) { return x.sd < y.sd; };
-  std::sort(sa.begin(), sa.end(), by_sd);
-  std::sort(sb.begin(), sb.end(), by_sd);
-  std::set<int> chosen;
-  for (size_t i = 0; i < std::min<size_t>(3, sa.size()); ++i) chosen.insert(sa[i].c);
-  for (size_t i = 0; i < std::min<size_t>(3, sb.size()); ++i) chosen.insert(sb[i].c);
-  PairReference ref;
-  for (int c : chosen) {
-    Reference r;
-    r.marker = c;
-    int n0, n1;
-    DistanceStats(m, a, c, &r.own[0], &r.own_sd[0], &n0);
-    DistanceStats(m, b, c, &r.own[1], &r.own_sd[1], &n1);
-    if (n0 >= 20 && n1 >= 20 && std::min(r.own_sd[0], r.own_sd[1]) <= max_sd) ref.refs.push_back(r);
-  }
-  return ref;
-}
-
-// Log-likelihood ratio (swapped over unswapped) of the frames [begin, end):
-// each label's distance to each reference marker, Gaussian about the reference
-// distance of that label (unswapped) or of the other label (swapped), each term
-// clipped to ±8 so one wrong reference sample cannot decide.
-double SegmentEvidence(const MarkerArray& m, int a, int b, const PairReference& ref, int64_t begin, int64_t end,
-                       int64_t* informative, double* swapped_misfit, int64_t* terms) {
-  double total = 0.0;
-  *informative = 0;
-  *swapped_misfit = 0.0;
-  *terms = 0;
-  const int label[2] = {a, b};
-  for (int64_t f = begin; f < end; ++f) {
-    bool any = false;
-    for (int l = 0; l < 2; ++l) {
-      if (!m.Visible(f, label[l])) continue;
-      const Vector3d x = At(m, f, label[l]);
-      for (const Reference& r : ref.refs) {
-        if (!m.Visible(f, r.marker)) continue;
-        const double d = (x - At(m, f, r.marker)).norm();
-        const double zu = (d - r.own[l]) / r.own_sd[l], zs = (d - r.own[1 - l]) / r.own_sd[1 - l];
-        total += std::clamp(0.5 * (zu * zu - zs * zs), -8.0, 8.0);
-        *swapped_misfit += std::min(zs * zs, 64.0);
-        ++*terms;
-        any = true;
-      }
+  if (own.size() < 20) return false;
+  double centre = Median(&own);
+  std::vector<double> dev;
+  for (int iter = 0; iter < 2; ++iter) {
+    std::vector<double> nearest;
+    dev.clear();
+    for (size_t i = 0; i < seen.size(); ++i) {
+      double best = INFINITY, bd = NAN;
+      for (double d : {both_a[i], both_b[i]})
+        if (!std::isnan(d) && std::abs(d - centre) < best) best = std::abs(d - centre), bd = d;
+      nearest.push_back(bd);
+      dev.push_back(best);
     }
-    if (any) ++*informative;
+    centre = Median(&nearest);
   }
-  return total;
+  for (double& v : dev) v = std::abs(v);
+  auto q = dev.begin() + static_cast<std::ptrdiff_t>(dev.size() * 9 / 10);
+  std::nth_element(dev.begin(), q, dev.end());
+  *distance = centre;
+  *sd = *q / 1.645;
+  // The marker's own label must be the one at that distance most of the time
+  // (a swap exchanges a minority of the frames).
+  const double tol = 3.0 * std::max(*sd, 1.0);
+  size_t own_fits = 0, other_fits = 0;
+  const std::vector<double>& mine = label == 0 ? both_a : both_b;
+  const std::vector<double>& theirs = label == 0 ? both_b : both_a;
+  for (size_t i = 0; i < seen.size(); ++i) {
+    if (!std::isnan(mine[i]) && std::abs(mine[i] - centre) <= tol) ++own_fits;
+    if (!std::isnan(theirs[i]) && std::abs(theirs[i] - centre) <= tol) ++other_fits;
+  }
+  return own_fits >= 2 * other_fits && own_fits >= 20;
+}
+
+// 1.4826 × MAD of the distance between markers p and q (infinite when seen
+// together in fewer than 20 frames).
+double OwnSpread(const MarkerArray& m, int p, int q) {
+  std::vector<double> d;
+  for (int64_t f = 0; f < m.frames(); ++f)
+    if (m.Visible(f, p) && m.Visible(f, q)) d.push_back((At(m, f, p) - At(m, f, q)).norm());
+  if (d.size() < 20) return INFINITY;
+  const double centre = Median(&d);
+  for (double& v : d) v = std::abs(v - centre);
+  return 1.4826 * Median(&d);
+}
+
+// Evidence that a label sits at a rigid reference's distance: log of a
+// Gaussian-with-outliers likelihood over the outlier floor, in [0, clip].
+double Fit(double d, const Rigid& r, double floor_sd, double clip) {
+  const double z = (d - r.distance) / std::max(r.sd, floor_sd);
+  return std::log1p(std::exp(clip - 0.5 * z * z));
 }
 
 }  // namespace
@@ -247,7 +241,9 @@ std::vector<std::pair<int, int>> NeighbourPairs(const MarkerArray& markers, int 
       for (int64_t f = 0; f < frames; f += step)
         if (markers.Visible(f, i) && markers.Visible(f, j)) d.push_back((At(markers, f, i) - At(markers, f, j)).norm());
       if (d.size() < 5) continue;
-      median[static_cast<size_t>(i * nm + j)] = median[static_cast<size_t>(j * nm + i)] = Median(&d);
+      auto q = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 10);
+      std::nth_element(d.begin(), q, d.end());
+      median[static_cast<size_t>(i * nm + j)] = median[static_cast<size_t>(j * nm + i)] = *q;
     }
   std::set<std::pair<int, int>> pairs;
   std::vector<int> order(static_cast<size_t>(nm));
@@ -272,6 +268,12 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
       !(options.max_bridge_s > 0.0) || !(options.max_cost_ratio > 0.0 && options.max_cost_ratio < 1.0))
     throw InvalidInput(
         "label swaps: jump thresholds must be ≥ 0, the noise factor and bridge > 0, the cost ratio in (0, 1)");
+  if (options.references < 1 || !(options.reference_clip > 0.0) || !(options.evidence_weight > 0.0) ||
+      options.confirmed_bonus < 0.0 || options.open_penalty < 0.0 || options.broken_penalty < 0.0 ||
+      options.start_penalty < 0.0 || !(options.max_reference_sd_mm > 0.0))
+    throw InvalidInput(
+        "label swaps: references must be ≥ 1, the reference clip, evidence weight and reference spread > 0, the "
+        "state-change bonus and penalties ≥ 0");
   const int nm = static_cast<int>(markers.markers());
   const int64_t frames = markers.frames();
   auto check = [&](int c) {
@@ -310,6 +312,7 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
     neighbours_of[static_cast<size_t>(a)].insert(b);
     neighbours_of[static_cast<size_t>(b)].insert(a);
   }
+  std::vector<float> own_spread(static_cast<size_t>(nm) * static_cast<size_t>(nm), -1.0f);
   std::vector<Track> tracks(static_cast<size_t>(nm));
   std::vector<uint8_t> made(static_cast<size_t>(nm), 0);
   auto track = [&](int k) -> const Track& {
@@ -326,28 +329,24 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
     std::vector<int64_t> candidates;
     std::merge(ta.breaks.begin(), ta.breaks.end(), tb.breaks.begin(), tb.breaks.end(), std::back_inserter(candidates));
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-    // Boundaries: breaks where no unswapped link fits (a label seen on both
-    // sides within the bridge and continuing its own trajectory rules out an
-    // exchange there).
-    std::vector<Exchange> boundaries;
+    // Boundaries: breaks where neither label continues its own trajectory (a
+    // label seen on both sides within the bridge and continuing its own
+    // trajectory rules out an exchange there).
+    std::vector<Boundary> boundaries;
     for (int64_t s : candidates) {
       const End ap = Before(markers, ta, a, s, bridge), an = After(markers, ta, a, s, bridge);
       const End bp = Before(markers, tb, b, s, bridge), bn = After(markers, tb, b, s, bridge);
-      double u_min = INFINITY, s_max = 0.0;
-      int ns = 0;
+      double u_min = INFINITY;
       if (ap.ok && an.ok) u_min = std::min(u_min, LinkError(ap, an));
       if (bp.ok && bn.ok) u_min = std::min(u_min, LinkError(bp, bn));
       if (u_min < report.jump_mm) continue;
       // The best-fitting swapped link decides (the other may bridge a long gap of
       // fast motion that constant velocity cannot predict).
-      s_max = INFINITY;
+      double s_max = INFINITY;
+      int ns = 0;
       if (ap.ok && bn.ok) s_max = std::min(s_max, LinkError(ap, bn)), ++ns;
       if (bp.ok && an.ok) s_max = std::min(s_max, LinkError(bp, an)), ++ns;
-      // The swapped links must fit (else one marker jumped alone: a spike, a step),
-      // unless no link can be made across the break (both labels hidden around it).
       const double ref_error = std::isfinite(u_min) ? u_min : report.jump_mm;
-      // A label without a past within the bridge cannot be linked: the state
-      // evidence alone decides there.
       bool fits = ns > 0 && s_max <= options.max_cost_ratio * ref_error;
       if (!fits && ap.frame == s - 1 && bp.frame == s - 1 && an.frame == s && bn.frame == s) {
         // Both seen across the break: the pair's relative vector, which the hand's
@@ -358,86 +357,170 @@ SwapReport DetectLabelSwaps(const MarkerArray& markers, double rate_hz, const Sw
         const double flip = (r_now + r_pred).norm(), keep = (r_now - r_pred).norm();
         fits = keep >= report.jump_mm && flip <= options.max_cost_ratio * keep;
       }
-      // Confirmed exchange (1) or a break the state evidence alone must decide (0):
-      // a label without a past within the bridge cannot be linked.
-      if (fits)
-        boundaries.push_back({s, 1.0});
-      else if (ns == 0 || !ap.ok || !bp.ok)
-        boundaries.push_back({s, 0.0});
+      Boundary x;
+      x.frame = s;
+      x.kind = fits ? Boundary::kConfirmed : (ns == 0 || !ap.ok || !bp.ok) ? Boundary::kOpen : Boundary::kBroken;
+      boundaries.push_back(x);
     }
     if (boundaries.empty()) continue;
-    // State evidence per segment between boundaries: the labels' distances to
-    // reference markers whose distance to them is stable over the take.
+    // Rigid references of either marker among the pair's neighbours.
     std::set<int> near = neighbours_of[static_cast<size_t>(a)];
     near.insert(neighbours_of[static_cast<size_t>(b)].begin(), neighbours_of[static_cast<size_t>(b)].end());
-    const PairReference ref = MakeReference(markers, a, b, near, options.max_reference_sd_mm);
-    if (ref.refs.empty()) {
+    std::vector<Rigid> refs;
+    for (int label = 0; label < 2; ++label) {
+      std::vector<Rigid> mine;
+      for (int c : near) {
+        if (c == a || c == b) continue;
+        // Quick screen (cached per marker pair): the own label's robust spread
+        // (1.4826 × MAD, unmoved by a swap over a minority of the frames).
+        float& screen =
+            own_spread[static_cast<size_t>(label == 0 ? a : b) * static_cast<size_t>(nm) + static_cast<size_t>(c)];
+        if (screen < 0.0f) screen = static_cast<float>(OwnSpread(markers, label == 0 ? a : b, c));
+        if (!(screen <= options.max_reference_sd_mm)) continue;
+        Rigid r;
+        r.marker = c;
+        r.label = label;
+        if (RigidReference(markers, a, b, c, label, &r.distance, &r.sd) && r.sd <= options.max_reference_sd_mm)
+          mine.push_back(r);
+      }
+      std::sort(mine.begin(), mine.end(), [](const Rigid& x, const Rigid& y) { return x.sd < y.sd; });
+      if (mine.size() > static_cast<size_t>(options.references)) mine.resize(static_cast<size_t>(options.references));
+      refs.insert(refs.end(), mine.begin(), mine.end());
+    }
+    if (refs.empty()) {
       // No steady reference: the exchanges whose swapped links fit, paired in order.
-      std::vector<Exchange> fits;
-      for (const Exchange& x : boundaries)
-        if (x.confidence > 0.0) fits.push_back(x);
+      std::vector<int64_t> fits;
+      for (const Boundary& x : boundaries)
+        if (x.kind == Boundary::kConfirmed) fits.push_back(x.frame);
       for (size_t i = 0; i < fits.size(); i += 2) {
         DetectedSwap d;
         d.marker_a = a;
         d.marker_b = b;
-        d.first_frame = fits[i].frame;
+        d.first_frame = fits[i];
         d.open_ended = i + 1 >= fits.size();
-        d.end_frame = d.open_ended ? frames : fits[i + 1].frame;
-        d.confidence = d.open_ended ? 0.5 * fits[i].confidence : std::min(fits[i].confidence, fits[i + 1].confidence);
+        d.end_frame = d.open_ended ? frames : fits[i + 1];
+        d.confidence = d.open_ended ? 0.5 : 1.0;
+        // Unpaired, an exchange is only reported for pairs the caller named.
+        if (d.open_ended && options.pairs.empty()) continue;
         if (d.confidence >= options.min_confidence) report.swaps.push_back(d);
       }
       continue;
     }
+    // Segments between boundaries and their reference evidence (swapped over not).
     std::vector<int64_t> edges = {0};
-    for (const Exchange& x : boundaries) edges.push_back(x.frame);
+    for (const Boundary& x : boundaries) edges.push_back(x.frame);
     edges.push_back(frames);
-    bool state = false;
-    int64_t run_start = -1;
-    double run_evidence = 0.0;
-    int64_t run_frames = 0;
-    bool run_confirmed = false;
-    auto close_run = [&](int64_t end, bool end_confirmed) {
-      if (run_start < 0) return;
+    const size_t n = edges.size() - 1;
+    std::vector<double> evidence(n, 0.0);
+    std::vector<std::array<double, 2>> side_evidence(n, {0.0, 0.0});
+    std::vector<int64_t> informative(n, 0);
+    const int label_col[2] = {a, b};
+    bool sides[2] = {false, false};
+    for (const Rigid& r : refs) sides[r.label] = true;
+    for (size_t i = 0; i < n; ++i)
+      for (int64_t f = edges[i]; f < edges[i + 1]; ++f) {
+        double sum[2] = {0.0, 0.0};
+        int count[2] = {0, 0};
+        for (const Rigid& r : refs) {
+          if (!markers.Visible(f, r.marker)) continue;
+          const Vector3d c = At(markers, f, r.marker);
+          const int own = label_col[r.label], other = label_col[1 - r.label];
+          const bool vo = markers.Visible(f, own), vx = markers.Visible(f, other);
+          if (!vo && !vx) continue;
+          const double fit_own = vo ? Fit((At(markers, f, own) - c).norm(), r, 1.0, options.reference_clip) : 0.0;
+          const double fit_other = vx ? Fit((At(markers, f, other) - c).norm(), r, 1.0, options.reference_clip) : 0.0;
+          sum[r.label] += fit_other - fit_own;
+          ++count[r.label];
+        }
+        if (count[0] + count[1] == 0) continue;
+        ++informative[i];
+        for (int l = 0; l < 2; ++l)
+          if (count[l] > 0) {
+            evidence[i] += sum[l] / count[l];
+            side_evidence[i][l] += sum[l] / count[l];
+          }
+      }
+    // Two-state Viterbi over the segments: the state's evidence plus the cost
+    // of switching at each boundary (a bonus at a confirmed exchange).
+    auto switch_score = [&](size_t j) {  // boundary j separates segments j and j + 1
+      switch (boundaries[j].kind) {
+        case Boundary::kConfirmed:
+          return options.confirmed_bonus;
+        case Boundary::kOpen:
+          return -options.open_penalty;
+        default:
+          return -options.broken_penalty;
+      }
+    };
+    const double w = options.evidence_weight;
+    std::vector<std::array<int, 2>> from(n);
+    std::array<double, 2> score = {0.0, w * evidence[0] - options.start_penalty};
+    from[0] = {0, 1};
+    for (size_t i = 1; i < n; ++i) {
+      const double sw = switch_score(i - 1);
+      std::array<double, 2> next;
+      for (int st = 0; st < 2; ++st) {
+        const double stay = score[st], change = score[1 - st] + sw;
+        from[i][st] = stay >= change ? st : 1 - st;
+        next[st] = std::max(stay, change) + (st == 1 ? w * evidence[i] : 0.0);
+      }
+      score = next;
+    }
+    std::vector<int> state(n);
+    state[n - 1] = score[1] > score[0] ? 1 : 0;
+    for (size_t i = n - 1; i > 0; --i) state[i - 1] = from[i][state[i]];
+    // A swapped run also takes the neighbouring segments the references find
+    // swapped (positive evidence) but the boundary costs kept out: a marker seen
+    // for a frame or two in a gap around an exchange.
+    for (size_t i = 1; i < n; ++i)
+      if (state[i] == 1 && state[i - 1] == 0)
+        for (size_t k = i - 1;
+             k > 0 && state[k] == 0 && evidence[k] > 0.0 && informative[k] <= options.max_absorbed_frames; --k)
+          state[k] = 1;
+    for (size_t i = n - 1; i > 0; --i)
+      if (state[i - 1] == 1 && state[i] == 0)
+        for (size_t k = i; k < n && state[k] == 0 && evidence[k] > 0.0 && informative[k] <= options.max_absorbed_frames;
+             ++k)
+          state[k] = 1;
+    // Runs of the swapped state; the reference fit is judged over the whole run.
+    for (size_t i = 0; i < n;) {
+      if (state[i] == 0) {
+        ++i;
+        continue;
+      }
+      size_t j = i;
+      double ev = 0.0;
+      int64_t inf = 0;
+      double side[2] = {0.0, 0.0};
+      while (j < n && state[j] == 1) {
+        ev += evidence[j], inf += informative[j];
+        side[0] += side_evidence[j][0], side[1] += side_evidence[j][1];
+        ++j;
+      }
       DetectedSwap d;
       d.marker_a = a;
       d.marker_b = b;
-      d.first_frame = run_start;
-      d.end_frame = end;
-      d.open_ended = end == frames;
-      d.evidence = run_evidence / std::max<double>(1.0, static_cast<double>(run_frames));
+      d.first_frame = edges[i];
+      d.end_frame = edges[j];
+      d.open_ended = j == n;
+      d.evidence = ev / std::max<double>(1.0, static_cast<double>(inf));
       d.confidence = 1.0 - std::exp(-d.evidence);
       if (d.open_ended) d.confidence *= 0.5;
-      // Neither exchange seen in the trajectories: stronger evidence needed.
-      const bool enough = run_confirmed || end_confirmed || d.evidence >= options.min_unconfirmed_evidence;
-      if (enough && d.confidence >= options.min_confidence) report.swaps.push_back(d);
-      run_start = -1;
-    };
-    for (size_t i = 0; i + 1 < edges.size(); ++i) {
-      int64_t informative = 0, terms = 0;
-      double misfit = 0.0;
-      const double l = SegmentEvidence(markers, a, b, ref, edges[i], edges[i + 1], &informative, &misfit, &terms);
-      if (std::abs(l) >= options.min_evidence) {
-        // Swapped only when the exchanged labels fit the references (mean z² below
-        // max_swapped_misfit), not merely better than the labels as they are.
-        const bool both_confirmed = i > 0 && boundaries[i - 1].confidence > 0.0 && i + 1 < boundaries.size() + 1 &&
-                                    i < boundaries.size() && boundaries[i].confidence > 0.0;
-        const bool swapped =
-            l > 0.0 && (both_confirmed || misfit <= options.max_swapped_misfit * static_cast<double>(terms));
-        if (swapped && !state) {
-          run_start = edges[i];
-          run_evidence = 0.0;
-          run_frames = 0;
-          run_confirmed = i > 0 && boundaries[i - 1].confidence > 0.0;
-        }
-        if (!swapped && state) close_run(edges[i], i > 0 && boundaries[i - 1].confidence > 0.0);
-        state = swapped;
-      }
-      if (state) {
-        run_evidence += l;
-        run_frames += informative;
-      }
+      const bool confirmed_both = i > 0 && j < n && boundaries[i - 1].kind == Boundary::kConfirmed &&
+                                  boundaries[j - 1].kind == Boundary::kConfirmed;
+      // Each marker's references must agree; one marker's alone must be strong.
+      // A marker hidden over the whole run gives no evidence (0): enough when an
+      // end of the run is a confirmed exchange.
+      const bool confirmed_end = (i > 0 && boundaries[i - 1].kind == Boundary::kConfirmed) ||
+                                 (j < n && boundaries[j - 1].kind == Boundary::kConfirmed);
+      const bool agree = (!sides[0] || side[0] > 0.0 || (side[0] == 0.0 && confirmed_end)) &&
+                         (!sides[1] || side[1] > 0.0 || (side[1] == 0.0 && confirmed_end));
+      const bool sided = (sides[0] && sides[1]) || options.one_sided;
+      if ((confirmed_both || (sided && agree && d.evidence >= options.min_run_evidence)) &&
+          d.confidence >= options.min_confidence)
+        report.swaps.push_back(d);
+      i = j;
     }
-    if (state) close_run(frames, false);
   }
   // Exchanges back within a few frames are jitter, not a swap of labels.
   report.swaps.erase(
