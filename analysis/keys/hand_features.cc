@@ -3,9 +3,9 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
-#include <functional>
 #include <set>
 
 #include "core/error.h"
@@ -67,8 +67,8 @@ const std::array<std::string, kNumFingers>& FingerNames() {
 }
 
 const std::vector<std::string>& DistanceNames() {
-  static const std::vector<std::string> names = {"thumb_extension",  "index_extension",   "middle_extension",
-                                                 "ring_extension",   "little_extension",  "index_middle_tips",
+  static const std::vector<std::string> names = {"thumb_extension", "index_extension",  "middle_extension",
+                                                 "ring_extension",  "little_extension", "index_middle_tips",
                                                  "thumb_palm"};
   return names;
 }
@@ -78,15 +78,18 @@ std::string HandLayout::Check() const {
     if (proximal[f].empty() || distal[f].empty()) return "hand layout: finger " + FingerNames()[f] + " has no markers";
     if (proximal[f] == distal[f]) return "hand layout: finger " + FingerNames()[f] + " uses one marker twice";
   }
-  if (palm.size() < 3) return "hand layout: the palm needs at least 3 markers (has " + std::to_string(palm.size()) + ")";
+  if (palm.size() < 3)
+    return "hand layout: the palm needs at least 3 markers (has " + std::to_string(palm.size()) + ")";
   if (!thumb_palm.empty() && std::find(palm.begin(), palm.end(), thumb_palm) == palm.end())
     return "hand layout: thumb_palm " + thumb_palm + " is not one of the palm markers";
-  if (head.size() < 3) return "hand layout: the head needs at least 3 markers (has " + std::to_string(head.size()) + ")";
+  if (head.size() < 3)
+    return "hand layout: the head needs at least 3 markers (has " + std::to_string(head.size()) + ")";
   return "";
 }
 
 bool operator==(const HandLayout& a, const HandLayout& b) {
-  return a.proximal == b.proximal && a.distal == b.distal && a.palm == b.palm && a.thumb_palm == b.thumb_palm && a.head == b.head;
+  return a.proximal == b.proximal && a.distal == b.distal && a.palm == b.palm && a.thumb_palm == b.thumb_palm &&
+         a.head == b.head;
 }
 
 HandLayout ParseHandLayout(const nlohmann::json& section, const MarkerSet& set, const std::string& where) {
@@ -186,7 +189,8 @@ HandLayout DeriveHandLayout(const MarkerSet& set, const MarkerArray& markers, co
     std::array<Eigen::Vector3d, kNumFingers> c;
     bool ok = true;
     for (int i = 0; i < kNumFingers && ok; ++i)
-      ok = Centroid(markers, binding, segs[chains[i].front()].markers, t, segs[chains[i].front()].markers.size(), &c[i]);
+      ok =
+          Centroid(markers, binding, segs[chains[i].front()].markers, t, segs[chains[i].front()].markers.size(), &c[i]);
     if (!ok) continue;
     int thumb = 0;
     double best = std::numeric_limits<double>::infinity();
@@ -199,8 +203,8 @@ HandLayout DeriveHandLayout(const MarkerSet& set, const MarkerArray& markers, co
       const Eigen::Vector3d mean = pts.rowwise().mean();
       const Eigen::Matrix<double, 3, 4> centred = pts.colwise() - mean;
       Eigen::JacobiSVD<Eigen::Matrix<double, 3, 4>> svd(centred, Eigen::ComputeFullU);
-      const double residual = svd.singularValues()(1) * svd.singularValues()(1) +
-                              svd.singularValues()(2) * svd.singularValues()(2);
+      const double residual =
+          svd.singularValues()(1) * svd.singularValues()(1) + svd.singularValues()(2) * svd.singularValues()(2);
       // Relative to the spread of the thumb candidate from the line.
       const Eigen::Vector3d dir = svd.matrixU().col(0);
       const Eigen::Vector3d off = (c[j] - mean) - dir * dir.dot(c[j] - mean);
@@ -225,12 +229,13 @@ HandLayout DeriveHandLayout(const MarkerSet& set, const MarkerArray& markers, co
     ++votes[assign];
   }
   if (votes.empty()) {
-    throw InvalidInput(pre + "no frame shows the first segment of all five fingers; cannot tell the fingers apart "
-                             "(name the markers in a hand_layout section)");
+    throw InvalidInput(pre +
+                       "no frame shows the first segment of all five fingers; cannot tell the fingers apart "
+                       "(name the markers in a hand_layout section)");
   }
   auto winner = std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) {
-                        return a.second < b.second;
-                      })->first;
+                  return a.second < b.second;
+                })->first;
   // The index is the longer of the two outer fingers (the little finger is the
   // shortest): 95th percentile over frames of the distance from the first to
   // the last segment of the chain (its extended length).

@@ -43,8 +43,36 @@ int64_t TargetFrame(int64_t start, int64_t end, double plateau, const std::funct
   return near.empty() ? start : near[near.size() / 2];
 }
 
-void SetTargets(const Emissions& e, double plateau, DecodedKey* k) {
+// Arrival: the first frame of [start, end) whose score comes within
+// `tolerance` of the segment's best.
+int64_t ArrivalFrame(int64_t start, int64_t end, double tolerance, const std::function<double(int64_t)>& score) {
+  double best = kNegInf, worst = std::numeric_limits<double>::infinity();
+  for (int64_t t = start; t < end; ++t) {
+    const double v = score(t);
+    best = std::max(best, v);
+    if (v > kNegInf) worst = std::min(worst, v);
+  }
+  const double threshold = best - tolerance * (best - worst);
+  for (int64_t t = start; t < end; ++t)
+    if (score(t) >= threshold) return t;
+  return start;
+}
+
+void SetTargets(const KeyPosteriors& post, const Emissions& e, double plateau, double arrival, DecodedKey* k) {
   const int p = k->placement, s = k->shape;
+  const bool close = post.shape_closeness.rows() == post.frames() && post.placement_closeness.rows() == post.frames();
+  if (close) {
+    // Closeness to the class means peaks where the posture is reached; NaN
+    // (nothing observed) never wins.
+    auto value = [](double v) { return std::isnan(v) ? kNegInf : v; };
+    auto joint = [&](int64_t t) { return value(post.shape_closeness(t, s)) + value(post.placement_closeness(t, p)); };
+    k->target_frame = ArrivalFrame(k->start_frame, k->end_frame, arrival, joint);
+    k->shape_target_frame = ArrivalFrame(k->start_frame, k->end_frame, arrival,
+                                         [&](int64_t t) { return value(post.shape_closeness(t, s)); });
+    k->placement_target_frame = ArrivalFrame(k->start_frame, k->end_frame, arrival,
+                                             [&](int64_t t) { return value(post.placement_closeness(t, p)); });
+    return;
+  }
   k->target_frame = TargetFrame(k->start_frame, k->end_frame, plateau, [&](int64_t t) { return e.Key(t, p, s); });
   k->shape_target_frame =
       TargetFrame(k->start_frame, k->end_frame, plateau, [&](int64_t t) { return e.log_shape(t, s); });
@@ -60,6 +88,7 @@ std::string DecodeOptions::Check() const {
   if (!(aligned_min_key_ms > 0)) return "aligned_min_key_ms must be > 0";
   if (!(floor > 0 && floor < 1)) return "floor must be in (0, 1)";
   if (!(plateau_log >= 0)) return "plateau_log must be >= 0";
+  if (!(arrival_tolerance >= 0)) return "arrival_tolerance must be >= 0";
   return "";
 }
 
@@ -150,7 +179,7 @@ std::vector<DecodedKey> DecodeFree(const KeyPosteriors& posteriors, double rate_
     }
     keys.back().end_frame = t + 1;
   }
-  for (auto& key : keys) SetTargets(e, options.plateau_log, &key);
+  for (auto& key : keys) SetTargets(posteriors, e, options.plateau_log, options.arrival_tolerance, &key);
   return keys;
 }
 
@@ -210,7 +239,7 @@ std::vector<DecodedKey> DecodeAligned(const KeyPosteriors& posteriors, const std
     keys[j].end_frame = end;
     end = st;
   }
-  for (auto& key : keys) SetTargets(e, options.plateau_log, &key);
+  for (auto& key : keys) SetTargets(posteriors, e, options.plateau_log, options.arrival_tolerance, &key);
   return keys;
 }
 
@@ -261,8 +290,8 @@ EditAlignment AlignSequences(const std::vector<std::string>& decoded, const std:
   for (size_t j = 0; j <= b; ++j) cost[0][j] = static_cast<int>(j);
   for (size_t i = 1; i <= a; ++i)
     for (size_t j = 1; j <= b; ++j)
-      cost[i][j] = std::min({cost[i - 1][j - 1] + (decoded[i - 1] == expected[j - 1] ? 0 : 1), cost[i - 1][j] + 1,
-                             cost[i][j - 1] + 1});
+      cost[i][j] = std::min(
+          {cost[i - 1][j - 1] + (decoded[i - 1] == expected[j - 1] ? 0 : 1), cost[i - 1][j] + 1, cost[i][j - 1] + 1});
   EditAlignment out;
   size_t i = a, j = b;
   while (i > 0 || j > 0) {

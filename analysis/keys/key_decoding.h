@@ -14,10 +14,16 @@
 // contiguous segment per key, in order, each at least aligned_min_key_ms long,
 // maximising the same emission sum (dynamic programming, O(keys × frames)).
 //
-// Target frame of a decoded key: in its segment, the frame where the key's
-// joint posterior P(S)·P(P) is highest; when it saturates (several frames
-// within plateau_log of the best log value), the middle of those frames. The
-// shape and placement target frames are found the same way on each component.
+// Target frame of a decoded key: in its segment, the first frame whose
+// closeness comes within arrival_tolerance × (best − worst closeness in the
+// segment) of the best, i.e. where the features arrive near their closest
+// approach to the key's class means (closeness, GaussianClassifier::Closeness: minus the mean
+// squared standardised distance; posteriors saturate at 1 over the whole
+// hold). The hand arrives, then holds: the best frame of a hold is noise, its
+// first frame is the target. Joint closeness (shape + placement) for the key,
+// each component alone for the shape and placement target frames. Without closeness matrices (posteriors
+// built by hand) the frame where P(S)·P(P) is highest, the middle of the frames
+// within plateau_log of the best log value when it saturates.
 #include <Eigen/Core>
 #include <cstdint>
 #include <optional>
@@ -45,6 +51,7 @@ struct DecodeOptions {
   double aligned_min_key_ms = 40.0;  // aligned decoding: shortest key segment
   double floor = 1e-6;               // posterior floor before the log
   double plateau_log = 1e-3;         // target-frame plateau tolerance (log units)
+  double arrival_tolerance = 0.02;   // fraction of the segment's closeness range
   std::string Check() const;
 };
 

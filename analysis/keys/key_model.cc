@@ -117,8 +117,8 @@ GaussianClassifier GaussianClassifier::Fit(const Eigen::MatrixXd& samples, const
     auto& c = classes[k];
     const Eigen::ArrayXXd n = pair_counts[k].array();
     // Σ_ij = (scatter_ij + τ S_ij) / (dof_ij + τ), i.e. (dof Σ̂ + τ S) / (dof + τ).
-    Eigen::MatrixXd cov = ((n + tau) > 0).select((scatters[k].array() + tau * pooled.array()) / (n + tau).max(1e-300),
-                                                 0.0);
+    Eigen::MatrixXd cov =
+        ((n + tau) > 0).select((scatters[k].array() + tau * pooled.array()) / (n + tau).max(1e-300), 0.0);
     // Pairwise estimates need not be positive semi-definite: clip eigenvalues at 0.
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (cov + cov.transpose()));
     cov = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
@@ -171,9 +171,18 @@ void GaussianClassifier::Prepare() {
   }
 }
 
-void GaussianClassifier::LogJoint(const double* x, double* out) const {
+void GaussianClassifier::LogJoint(const double* x, double* out) const { Evaluate(x, out, nullptr); }
+
+void GaussianClassifier::Closeness(const double* x, double* out) const {
+  std::vector<double> tmp(static_cast<size_t>(num_labels_));
+  Evaluate(x, tmp.data(), out);
+}
+
+void GaussianClassifier::Evaluate(const double* x, double* out, double* close) const {
   const int d = dims();
   for (int y = 0; y < num_labels_; ++y) out[y] = kNegInf;
+  if (close != nullptr)
+    for (int y = 0; y < num_labels_; ++y) close[y] = kNaN;
   int observed = 0;
   for (int i = 0; i < d; ++i) observed += std::isnan(x[i]) ? 0 : 1;
   if (observed == d) {
@@ -189,6 +198,7 @@ void GaussianClassifier::LogJoint(const double* x, double* out) const {
         q += s * s;
       }
       out[classes_[k].label] = fast_const_[k] - 0.5 * q;
+      if (close != nullptr) close[classes_[k].label] = -q / d;
     }
     return;
   }
@@ -212,6 +222,7 @@ void GaussianClassifier::LogJoint(const double* x, double* out) const {
     const Eigen::VectorXd y = llt.matrixL().solve(e);
     const double logdet = 2 * Eigen::MatrixXd(llt.matrixL()).diagonal().array().log().sum();
     out[c.label] = -0.5 * (o * std::log(2 * std::numbers::pi) + logdet + y.squaredNorm()) + std::log(c.prior);
+    if (close != nullptr) close[c.label] = -y.squaredNorm() / static_cast<double>(o);
   }
 }
 
@@ -225,6 +236,17 @@ void GaussianClassifier::Posterior(const double* x, double* out) const {
     sum += out[y];
   }
   for (int y = 0; y < num_labels_; ++y) out[y] /= sum;
+}
+
+Eigen::MatrixXd GaussianClassifier::Closeness(const Eigen::MatrixXd& features) const {
+  if (features.cols() != dims()) throw InvalidInput("Gaussian model: features have the wrong number of columns");
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> out(features.rows(), num_labels_);
+  std::vector<double> x(static_cast<size_t>(dims()));
+  for (Eigen::Index t = 0; t < features.rows(); ++t) {
+    for (int i = 0; i < dims(); ++i) x[i] = features(t, i);
+    Closeness(x.data(), out.row(t).data());
+  }
+  return out;
 }
 
 Eigen::MatrixXd GaussianClassifier::Posteriors(const Eigen::MatrixXd& features) const {
@@ -254,8 +276,8 @@ bool ParseKeyCode(const std::string& text, int* placement, int* shape) {
 
 std::string KeyCode(int placement, int shape) { return std::to_string(placement) + std::to_string(shape); }
 
-KeyLabels LabelsFromTiers(const LabelTier& shape_tier, const LabelTier* placement_tier, double rate_hz,
-                          int64_t frames, const std::string& where) {
+KeyLabels LabelsFromTiers(const LabelTier& shape_tier, const LabelTier* placement_tier, double rate_hz, int64_t frames,
+                          const std::string& where) {
   if (!(rate_hz > 0)) throw InvalidInput(where + ": frame rate must be > 0");
   auto frame_of = [&](double t) {
     return std::clamp<int64_t>(static_cast<int64_t>(std::llround(t * rate_hz)), 0, std::max<int64_t>(frames - 1, 0));
@@ -338,8 +360,7 @@ KeyModel TrainKeyModel(const KeyTrainingSet& set, const HandLayout& layout, cons
   if (shape_x.rows() == 0) shape_x.resize(0, kNumDistances);
   Eigen::MatrixXd place_x = set.placement_samples;
   if (place_x.rows() == 0) place_x.resize(0, 3);
-  m.shape = GaussianClassifier::Fit(shape_x, set.shape_labels, kNumShapes, shape_names, DistanceNames(),
-                                    options.shape);
+  m.shape = GaussianClassifier::Fit(shape_x, set.shape_labels, kNumShapes, shape_names, DistanceNames(), options.shape);
   m.placement = GaussianClassifier::Fit(place_x, set.placement_labels, kNumPlacements, placement_names,
                                         {"tip_x", "tip_y", "tip_z"}, options.placement);
   m.index_shapes = options.index_shapes;
@@ -360,6 +381,8 @@ KeyPosteriors ScoreFrames(const KeyModel& model, const HandFeatures& features) {
         model.IndexFinger(static_cast<int>(best)) ? features.index_tip.row(t) : features.middle_tip.row(t);
   }
   out.placement = model.placement.Posteriors(out.placement_features);
+  out.shape_closeness = model.shape.Closeness(features.distances);
+  out.placement_closeness = model.placement.Closeness(out.placement_features);
   return out;
 }
 

@@ -58,7 +58,8 @@ class GaussianClassifier {
   // estimates (each over the samples observing that dimension / pair), the
   // shrunk covariance has its negative eigenvalues clipped to 0 before the
   // ridge; rows with nothing observed are skipped. num_labels: labels are
-  // 0..num_labels-1; class_names one per label. Throws InvalidInput when no class has a sample or a label is out of range.
+  // 0..num_labels-1; class_names one per label. Throws InvalidInput when no class has a sample or a label is out of
+  // range.
   static GaussianClassifier Fit(const Eigen::MatrixXd& samples, const std::vector<int>& labels, int num_labels,
                                 const std::vector<std::string>& class_names,
                                 const std::vector<std::string>& feature_names, const GaussianOptions& options);
@@ -80,9 +81,16 @@ class GaussianClassifier {
   Eigen::MatrixXd Posteriors(const Eigen::MatrixXd& features) const;
   // One frame's posteriors into out (num_labels() values).
   void Posterior(const double* x, double* out) const;
+  // Closeness of x to each class mean: minus the squared Mahalanobis distance
+  // over the observed dimensions divided by their number (0 at the mean; NaN
+  // for absent labels and frames with nothing observed). Unlike the posterior
+  // it does not saturate, so it peaks where the posture is reached.
+  void Closeness(const double* x, double* out) const;
+  Eigen::MatrixXd Closeness(const Eigen::MatrixXd& features) const;
 
  private:
   void Prepare();
+  void Evaluate(const double* x, double* log_joint, double* closeness) const;
   GaussianOptions options_;
   int num_labels_ = 0;
   std::vector<std::string> feature_names_;
@@ -109,8 +117,8 @@ struct KeyLabels {
 // point tier of placement targets (else the placement targets are the same
 // points). Frame = round(time × rate_hz), kept inside the take. Throws
 // InvalidInput naming `where`, the tier and the label for a bad code.
-KeyLabels LabelsFromTiers(const LabelTier& shape_tier, const LabelTier* placement_tier, double rate_hz,
-                          int64_t frames, const std::string& where);
+KeyLabels LabelsFromTiers(const LabelTier& shape_tier, const LabelTier* placement_tier, double rate_hz, int64_t frames,
+                          const std::string& where);
 
 struct KeyModelOptions {
   GaussianOptions shape;
@@ -145,9 +153,11 @@ KeyModel TrainKeyModel(const KeyTrainingSet& set, const HandLayout& layout, cons
 
 // The gestural score of a take.
 struct KeyPosteriors {
-  Eigen::MatrixXd shape;               // frames × 9
-  Eigen::MatrixXd placement;           // frames × 6
-  Eigen::MatrixXd placement_features;  // frames × 3: the chosen fingertip in the head frame
+  Eigen::MatrixXd shape;                // frames × 9
+  Eigen::MatrixXd placement;            // frames × 6
+  Eigen::MatrixXd placement_features;   // frames × 3: the chosen fingertip in the head frame
+  Eigen::MatrixXd shape_closeness;      // frames × 9 (GaussianClassifier::Closeness); may be empty
+  Eigen::MatrixXd placement_closeness;  // frames × 6
   int64_t frames() const { return shape.rows(); }
 };
 

@@ -79,7 +79,7 @@ TEST(GaussianClassifier, FitRecoversMeansAndCovariancesOfSyntheticClasses) {
 TEST(GaussianClassifier, RegularisationAndCountPriorsAreAsStated) {
   // Two classes, samples chosen so the raw covariances are known exactly.
   Eigen::MatrixXd x(6, 2);
-  x << 0, 0, 2, 0, 1, 3,  // class 0: mean (1, 1)
+  x << 0, 0, 2, 0, 1, 3,       // class 0: mean (1, 1)
       10, 10, 12, 10, 11, 13;  // class 1: same spread, mean (11, 11)
   const std::vector<int> y = {0, 0, 0, 1, 1, 1};
   GaussianOptions o;
