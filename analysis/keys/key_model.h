@@ -23,6 +23,7 @@
 
 #include "analysis/keys/hand_features.h"
 #include "core/take.h"
+#include "models/rigid_model.h"
 
 namespace csw::keys {
 
@@ -135,6 +136,7 @@ struct KeyModel {
   std::vector<int> index_shapes;
   HandLayout layout;
   Eigen::Matrix3Xd head_reference;  // 3 × layout.head.size()
+  ModelInfo info;                   // provenance (corpus, training takes, options as JSON)
   bool IndexFinger(int shape) const;
 };
 
