@@ -126,6 +126,7 @@ struct Tally {
   int free_expected = 0, free_matches = 0, free_insertions = 0, free_deletions = 0, free_substitutions = 0;
   int aligned_keys = 0, aligned_correct = 0;
   std::vector<double> aligned_error_ms, aligned_shape_error_ms, aligned_placement_error_ms;
+  std::vector<double> aligned_error_reached_ms, aligned_error_approached_ms;
   double free_rate = 0, aligned_rate = 0;
 };
 
@@ -206,6 +207,9 @@ Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const H
                              ? ep
                              : 1000.0 * std::abs(aligned[k].target_frame / rate - truth[k].timing.shape_target_s);
       tally.aligned_error_ms.push_back(err);
+      (shape_approached[k] || placement_approached[k] ? tally.aligned_error_approached_ms
+                                                      : tally.aligned_error_reached_ms)
+          .push_back(err);
       if (shape_changes) tally.aligned_shape_error_ms.push_back(es);
       if (place_changes) tally.aligned_placement_error_ms.push_back(ep);
       ++tally.aligned_keys;
@@ -235,7 +239,9 @@ Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const H
             << "aligned " << tally.aligned_correct << " / " << tally.aligned_keys << " = " << tally.aligned_rate
             << ", key target error mean " << Mean(tally.aligned_error_ms) << " ms; shape target "
             << Mean(tally.aligned_shape_error_ms) << " ms, placement target " << Mean(tally.aligned_placement_error_ms)
-            << " ms\n"
+            << " ms; reached keys " << Mean(tally.aligned_error_reached_ms) << " ms ("
+            << tally.aligned_error_reached_ms.size() << "), approached " << Mean(tally.aligned_error_approached_ms)
+            << " ms (" << tally.aligned_error_approached_ms.size() << ")\n"
             << "shape confusion (rows truth)\n"
             << tally.shape.counts << "\nplacement confusion\n"
             << tally.placement.counts << "\n";
