@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "core/error.h"
 #include "core/markerset.h"
 #include "datasets/virtual_cuer.h"
@@ -173,6 +175,42 @@ TEST(KeysJob, BadLabelCodesAndMissingKeyModelGiveClearErrors) {
     FAIL() << "scored without a key model";
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("no key model"), std::string::npos) << e.what();
+  }
+}
+
+TEST(KeysJob, ExplicitLayoutSectionNamesTheMarkers) {
+  Fixture fx;
+  Progress progress;
+  // The layout derived from the roles, written as a hand_layout section without
+  // "head" (the marker set's head cluster is the default).
+  KeysTrainOptions t;
+  t.corpus = fx.corpus;
+  t.takes = {"s0"};
+  t.output = fx.keys;
+  KeysTrain(t, progress);
+  const keys::HandLayout derived = LoadModelFile(fx.keys).keys->layout;
+  json section = keys::HandLayoutToJson(derived);
+  section.erase("head");
+  section["thumb_palm"] = derived.palm[0];  // a different palm point than the derived one
+  const std::string layout_path = (fx.dir / "layout.json").string();
+  std::ofstream(layout_path) << json{{"hand_layout", section}}.dump();
+  t.layout = layout_path;
+  const std::string other = (fx.dir / "keys2.h5").string();
+  t.output = other;
+  KeysTrain(t, progress);
+  const keys::HandLayout explicit_layout = LoadModelFile(other).keys->layout;
+  EXPECT_EQ(explicit_layout.proximal, derived.proximal);
+  EXPECT_EQ(explicit_layout.distal, derived.distal);
+  EXPECT_EQ(explicit_layout.head, derived.head);
+  EXPECT_EQ(explicit_layout.thumb_palm, derived.palm[0]);
+  // A misspelt key is an error naming the file.
+  std::ofstream(layout_path) << R"({"hand_layout": {"fingerz": {}}})";
+  try {
+    KeysTrain(t, progress);
+    FAIL() << "bad layout accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("layout.json: hand_layout: unknown key \"fingerz\""), std::string::npos)
+        << e.what();
   }
 }
 

@@ -148,11 +148,12 @@ json KeysTrain(const KeysTrainOptions& options, Progress& progress) {
   std::optional<MarkerSet> given;
   if (!options.markerset.empty()) given = LoadMarkerSet(options.markerset);
   std::optional<keys::HandLayout> layout;
+  json layout_section;
   if (!options.layout.empty()) {
     const json doc = ParseJsonText(ReadTextFile(options.layout), options.layout);
     if (!doc.is_object() || !doc.contains("hand_layout"))
       throw UsageError(options.layout + ": no \"hand_layout\" section");
-    layout = ParseHandLayout(doc["hand_layout"], given.value_or(MarkerSet{}), options.layout + ": hand_layout");
+    layout_section = doc["hand_layout"];
   }
   Eigen::Matrix3Xd head;
   KeyTrainingSet set;
@@ -165,6 +166,8 @@ json KeysTrain(const KeysTrainOptions& options, Progress& progress) {
     const std::string where = corpus.path() + ": take '" + range.take + "'";
     if (!(take.rate_hz > 0)) throw InvalidInput(where + ": no frame rate");
     const std::optional<MarkerSet> ms = TakeSet(corpus, range.take, given, where);
+    if (!layout && !layout_section.is_null())  // the head cluster defaults to the marker set's
+      layout = ParseHandLayout(layout_section, ms.value_or(MarkerSet{}), options.layout + ": hand_layout");
     if (!ms && !layout)
       throw UsageError(where + " was imported without --markerset: give --markerset SET.json or --layout FILE.json");
     const MarkerBinding binding = Bind(ms, take, where);
