@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +35,7 @@ constexpr char kHeadGroup[] = "head_motion";
 constexpr char kForearmGroup[] = "forearm_motion";
 constexpr char kFaceGroup[] = "face";
 constexpr char kHandGroup[] = "hand";
+constexpr char kKeysGroup[] = "keys";
 // Largest dataset (elements) the reader agrees to allocate; models are small.
 constexpr hssize_t kMaxElements = hssize_t{1} << 28;
 // Tolerance of the rest pose's orthonormality check.
@@ -791,6 +793,167 @@ HandModel ReadHand(hid_t parent, const Checker& c) {
   return m;
 }
 
+// ---------------------------------------------------------------------------
+// The key model /keys (analysis/keys/key_model.h)
+
+void ValidateGaussians(const keys::GaussianClassifier& g, int labels, int dims, const std::string& object,
+                       const Checker& c) {
+  c.Require(g.num_labels() == labels, object, "has " + Str(g.num_labels()) + " labels, expected " + Str(labels));
+  RequireLength(static_cast<int64_t>(g.feature_names().size()), dims, object + "/feature_names", "the model's features",
+                c);
+  c.Require(!g.classes().empty(), object, "has no class");
+  for (const auto& k : g.classes()) {
+    c.Require(k.label >= 0 && k.label < labels, object + "/labels", "label " + Str(k.label) + " out of range");
+    RequireFinite(k.mean, object + "/means", c);
+    RequireFinite(k.covariance, object + "/covariances", c);
+    c.Require(k.prior > 0 && k.prior <= 1, object + "/priors", "prior " + Num(k.prior) + " outside (0, 1]");
+    c.Require(k.count >= 0, object + "/counts", "negative count");
+  }
+}
+
+void ValidateKeys(const keys::KeyModel& m, const std::string& object, const Checker& c) {
+  ValidateInfo(m.info, object, c);
+  ValidateGaussians(m.shape, keys::kNumShapes, keys::kNumDistances, object + "/shape", c);
+  ValidateGaussians(m.placement, keys::kNumPlacements, 3, object + "/placement", c);
+  const std::string reason = m.layout.Check();
+  if (!reason.empty()) c.Fail(object + "/layout", reason);
+  c.Require(m.head_reference.cols() == static_cast<Eigen::Index>(m.layout.head.size()), object + "/head_reference",
+            "has " + Str(m.head_reference.cols()) + " points, the layout " +
+                Str(static_cast<int64_t>(m.layout.head.size())) + " head markers");
+  RequireFinite(m.head_reference, object + "/head_reference", c);
+  for (int s : m.index_shapes)
+    c.Require(s >= 0 && s < keys::kNumShapes, object + "/index_shapes", "shape " + Str(s) + " out of 0-8");
+}
+
+void WriteGaussians(hid_t parent, const std::string& name, const keys::GaussianClassifier& g, const Where& where,
+                    const std::string& object) {
+  Handle gr = h5::CreateGroup(parent, name, where, object);
+  const auto& o = g.options();
+  h5::WriteAttr(gr.get(), "num_labels", int64_t{g.num_labels()}, where, object);
+  h5::WriteAttr(gr.get(), "shrinkage_samples", o.shrinkage_samples, where, object);
+  h5::WriteAttr(gr.get(), "ridge_fraction", o.ridge_fraction, where, object);
+  h5::WriteAttr(gr.get(), "min_variance", o.min_variance, where, object);
+  h5::WriteAttr(gr.get(), "priors", std::string(keys::PriorKindName(o.priors)), where, object);
+  h5::WriteStrings(gr.get(), "feature_names", g.feature_names(), where, object + "/feature_names");
+  const auto k = static_cast<hsize_t>(g.classes().size());
+  const auto d = static_cast<hsize_t>(g.dims());
+  std::vector<std::string> names;
+  std::vector<int64_t> labels, counts;
+  std::vector<double> priors, means, covs;
+  for (const auto& c : g.classes()) {
+    names.push_back(c.name);
+    labels.push_back(c.label);
+    counts.push_back(c.count);
+    priors.push_back(c.prior);
+    for (Eigen::Index i = 0; i < c.mean.size(); ++i) means.push_back(c.mean(i));
+    for (Eigen::Index i = 0; i < c.covariance.rows(); ++i)
+      for (Eigen::Index j = 0; j < c.covariance.cols(); ++j) covs.push_back(c.covariance(i, j));
+  }
+  h5::WriteStrings(gr.get(), "class_names", names, where, object + "/class_names");
+  WriteArray(gr.get(), "labels", {k}, H5T_STD_I64LE, H5T_NATIVE_INT64, labels.data(), where, object + "/labels");
+  WriteArray(gr.get(), "counts", {k}, H5T_STD_I64LE, H5T_NATIVE_INT64, counts.data(), where, object + "/counts");
+  WriteVector(gr.get(), "priors", priors, where, object + "/priors");
+  WriteArray(gr.get(), "means", {k, d}, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, means.data(), where, object + "/means");
+  WriteArray(gr.get(), "covariances", {k, d, d}, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, covs.data(), where,
+             object + "/covariances");
+}
+
+void WriteKeys(hid_t parent, const keys::KeyModel& m, const Where& where) {
+  const std::string object = std::string("/") + kKeysGroup;
+  Handle g = h5::CreateGroup(parent, kKeysGroup, where, object);
+  h5::WriteAttr(g.get(), "version", int64_t{keys::KeyModel::kVersion}, where, object);
+  WriteInfo(g.get(), m.info, where, object);
+  WriteIndices(g.get(), "index_shapes", m.index_shapes, where, object + "/index_shapes");
+  const std::string lo = object + "/layout";
+  Handle lg = h5::CreateGroup(g.get(), "layout", where, lo);
+  h5::WriteAttr(lg.get(), "thumb_palm", m.layout.thumb_palm, where, lo);
+  h5::WriteStrings(lg.get(), "proximal", {m.layout.proximal.begin(), m.layout.proximal.end()}, where, lo + "/proximal");
+  h5::WriteStrings(lg.get(), "distal", {m.layout.distal.begin(), m.layout.distal.end()}, where, lo + "/distal");
+  h5::WriteStrings(lg.get(), "palm", m.layout.palm, where, lo + "/palm");
+  h5::WriteStrings(lg.get(), "head", m.layout.head, where, lo + "/head");
+  WritePoints(g.get(), "head_reference", m.head_reference, where, object + "/head_reference");
+  WriteGaussians(g.get(), "shape", m.shape, where, object + "/shape");
+  WriteGaussians(g.get(), "placement", m.placement, where, object + "/placement");
+}
+
+keys::GaussianClassifier ReadGaussians(hid_t parent, const std::string& name, const std::string& object,
+                                       const Checker& c) {
+  Handle g = OpenGroupChecked(parent, name, object, c);
+  keys::GaussianOptions o;
+  const int labels = RequiredIntAttr(g.get(), "num_labels", object, c);
+  o.shrinkage_samples = RequiredDoubleAttr(g.get(), "shrinkage_samples", object, c);
+  o.ridge_fraction = RequiredDoubleAttr(g.get(), "ridge_fraction", object, c);
+  o.min_variance = RequiredDoubleAttr(g.get(), "min_variance", object, c);
+  const std::string priors = RequiredStringAttr(g.get(), "priors", object, c);
+  if (!keys::ParsePriorKind(priors, &o.priors)) c.Fail(object, "attribute priors is '" + priors + "'");
+  const auto features = ReadStringList(g.get(), "feature_names", object + "/feature_names", c);
+  const auto names = ReadStringList(g.get(), "class_names", object + "/class_names", c);
+  const auto label_list = ReadIndices(g.get(), "labels", object + "/labels", c);
+  const auto counts = ReadDoubleList(g.get(), "counts", object + "/counts", c);
+  const auto prior_list = ReadDoubleList(g.get(), "priors", object + "/priors", c);
+  const Numbers means = ReadNumbers(g.get(), "means", 2, object + "/means", c);
+  const Numbers covs = ReadNumbers(g.get(), "covariances", 3, object + "/covariances", c);
+  const size_t k = names.size(), d = features.size();
+  RequireLength(static_cast<int64_t>(label_list.size()), static_cast<int64_t>(k), object + "/labels", "one per class",
+                c);
+  RequireLength(static_cast<int64_t>(counts.size()), static_cast<int64_t>(k), object + "/counts", "one per class", c);
+  RequireLength(static_cast<int64_t>(prior_list.size()), static_cast<int64_t>(k), object + "/priors", "one per class",
+                c);
+  c.Require(means.dims[0] == k && means.dims[1] == d, object + "/means", "expected (classes, features)");
+  c.Require(covs.dims[0] == k && covs.dims[1] == d && covs.dims[2] == d, object + "/covariances",
+            "expected (classes, features, features)");
+  std::vector<keys::GaussianClass> classes(k);
+  for (size_t i = 0; i < k; ++i) {
+    auto& cl = classes[i];
+    cl.name = names[i];
+    cl.label = label_list[i];
+    cl.count = static_cast<int64_t>(counts[i]);
+    cl.prior = prior_list[i];
+    cl.mean.resize(static_cast<Eigen::Index>(d));
+    cl.covariance.resize(static_cast<Eigen::Index>(d), static_cast<Eigen::Index>(d));
+    for (size_t a = 0; a < d; ++a) {
+      cl.mean(static_cast<Eigen::Index>(a)) = means.values[i * d + a];
+      for (size_t b = 0; b < d; ++b)
+        cl.covariance(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = covs.values[(i * d + a) * d + b];
+    }
+    RequireFinite(cl.mean, object + "/means", c);
+    RequireFinite(cl.covariance, object + "/covariances", c);
+  }
+  try {
+    return keys::GaussianClassifier::FromClasses(std::move(classes), labels, features, o);
+  } catch (const InvalidInput& e) {
+    c.Fail(object, e.what());
+  }
+}
+
+keys::KeyModel ReadKeys(hid_t parent, const Checker& c) {
+  const std::string object = std::string("/") + kKeysGroup;
+  Handle g = OpenGroupChecked(parent, kKeysGroup, object, c);
+  const int version = RequiredIntAttr(g.get(), "version", object, c);
+  if (version > keys::KeyModel::kVersion)
+    c.Fail(object, "key model version " + Str(version) + " is newer than this csw reads (" +
+                       Str(keys::KeyModel::kVersion) + ")");
+  keys::KeyModel m;
+  m.info = ReadInfo(g.get(), object, c);
+  m.index_shapes = ReadIndices(g.get(), "index_shapes", object + "/index_shapes", c);
+  const std::string lo = object + "/layout";
+  Handle lg = OpenGroupChecked(g.get(), "layout", lo, c);
+  m.layout.thumb_palm = h5::ReadAttrString(lg.get(), "thumb_palm", c.where(), lo).value_or("");
+  const auto prox = ReadStringList(lg.get(), "proximal", lo + "/proximal", c);
+  const auto dist = ReadStringList(lg.get(), "distal", lo + "/distal", c);
+  RequireLength(static_cast<int64_t>(prox.size()), keys::kNumFingers, lo + "/proximal", "one per finger", c);
+  RequireLength(static_cast<int64_t>(dist.size()), keys::kNumFingers, lo + "/distal", "one per finger", c);
+  std::copy(prox.begin(), prox.end(), m.layout.proximal.begin());
+  std::copy(dist.begin(), dist.end(), m.layout.distal.begin());
+  m.layout.palm = ReadStringList(lg.get(), "palm", lo + "/palm", c);
+  m.layout.head = ReadStringList(lg.get(), "head", lo + "/head", c);
+  m.head_reference = ReadPoints(g.get(), "head_reference", object + "/head_reference", c);
+  m.shape = ReadGaussians(g.get(), "shape", object + "/shape", c);
+  m.placement = ReadGaussians(g.get(), "placement", object + "/placement", c);
+  ValidateKeys(m, object, c);
+  return m;
+}
+
 // Opens an existing file for reading. IoError when it cannot be read at all,
 // ParseError when it is not (readable) HDF5.
 Handle OpenForRead(const std::string& path, const Checker& c) {
@@ -834,6 +997,7 @@ ModelFile Parse(hid_t file, const Checker& c) {
   }
   if (h5::LinkExists(file, kFaceGroup)) out.face = ReadFace(file, c);
   if (h5::LinkExists(file, kHandGroup)) out.hand = ReadHand(file, c);
+  if (h5::LinkExists(file, kKeysGroup)) out.keys = ReadKeys(file, c);
   return out;
 }
 
@@ -918,6 +1082,7 @@ void SaveModelFileLocked(const std::string& path, const ModelFile& models) {
   if (models.forearm) ValidateRigid(*models.forearm, std::string("/") + kForearmGroup, c);
   if (models.face) ValidateFace(*models.face, std::string("/") + kFaceGroup, c);
   if (models.hand) ValidateHand(*models.hand, std::string("/") + kHandGroup, c);
+  if (models.keys) ValidateKeys(*models.keys, std::string("/") + kKeysGroup, c);
 
   auto lock = h5::Lock();
   RefuseToClobber(path);
@@ -950,6 +1115,7 @@ void SaveModelFileLocked(const std::string& path, const ModelFile& models) {
     if (models.forearm) WriteRigid(f, kForearmGroup, *models.forearm, where, std::string("/") + kForearmGroup);
     if (models.face) WriteFace(f, *models.face, where);
     if (models.hand) WriteHand(f, *models.hand, where);
+    if (models.keys) WriteKeys(f, *models.keys, where);
     h5::Check(H5Fflush(f, H5F_SCOPE_GLOBAL), where, "cannot flush", temp.path);
     if (!file.Reset()) throw IoError(path, "cannot close " + temp.path + ": " + h5::TakeErrorMessage());
   }
@@ -982,6 +1148,7 @@ void UpdateModelFile(const std::string& path, const ModelFile& update) {
   if (update.forearm) models.forearm = update.forearm;
   if (update.face) models.face = update.face;
   if (update.hand) models.hand = update.hand;
+  if (update.keys) models.keys = update.keys;
   SaveModelFileLocked(path, models);
 }
 

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "analysis/keys/key_model.h"
 #include "models/face_model.h"
 #include "models/hand_model.h"
 #include "models/rigid_model.h"
@@ -21,10 +22,11 @@ namespace csw {
 inline constexpr int kModelFormatVersion = 1;
 
 struct ModelFile {
-  std::optional<RigidModel> head;     // /head_motion
-  std::optional<RigidModel> forearm;  // /forearm_motion
-  std::optional<FaceModel> face;      // /face
-  std::optional<HandModel> hand;      // /hand
+  std::optional<RigidModel> head;      // /head_motion
+  std::optional<RigidModel> forearm;   // /forearm_motion
+  std::optional<FaceModel> face;       // /face
+  std::optional<HandModel> hand;       // /hand
+  std::optional<keys::KeyModel> keys;  // /keys (the Gaussian key recogniser)
 };
 
 // Throws IoError when the file cannot be read, ParseError naming the file and

@@ -8,7 +8,10 @@
 #include "workbench/jobs/clean_job.h"
 #include "workbench/jobs/cue_job.h"
 #include "workbench/jobs/jobs.h"
+#include "workbench/jobs/keys_job.h"
+#include "workbench/jobs/keys_suggest_job.h"
 #include "workbench/jobs/model_jobs.h"
+#include "workbench/jobs/phasing_job.h"
 
 namespace csw::cli {
 
@@ -374,6 +377,181 @@ class CueCommand : public Command {
   bool json_ = false;
 };
 
+class KeysCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("keys",
+                              "Gaussian key recogniser (docs/analysis.md): train on labelled target frames, "
+                              "score takes (gestural score, decoded key tiers)");
+    sub_->require_subcommand(1);
+    train_ = sub_->add_subcommand("train",
+                                  "Train the shape and placement Gaussians on labelled target frames and "
+                                  "save them into a model file (group /keys)");
+    train_->add_option("corpus", train_options_.corpus, "Corpus file")->required();
+    train_
+        ->add_option("--takes", train_options_.takes,
+                     "Training takes, comma-separated names, name@first:end or glob patterns (docs/cli.md)")
+        ->required();
+    train_->add_option("--tier", train_options_.tier, "Point tier of shape targets (codes PS)")->capture_default_str();
+    train_
+        ->add_option("--placement-tier", train_options_.placement_tier,
+                     "Point tier of placement targets, when the take has it")
+        ->capture_default_str();
+    train_->add_option("--markerset", train_options_.markerset,
+                       "Marker-set JSON; default the one each take was imported with");
+    train_->add_option("--layout", train_options_.layout,
+                       "JSON file with a hand_layout section naming the finger, palm and head markers");
+    train_
+        ->add_option("--shrinkage", train_options_.model.shape.shrinkage_samples,
+                     "Covariance shrinkage towards the pooled covariance, in samples")
+        ->capture_default_str();
+    train_
+        ->add_option("--min-variance", train_options_.model.shape.min_variance,
+                     "Variance added to every covariance diagonal (mm²)")
+        ->capture_default_str();
+    train_->add_option("--priors", priors_, "Class priors: uniform or counts")
+        ->check(CLI::IsMember({"uniform", "counts"}))
+        ->capture_default_str();
+    train_->add_option("-o,--output", train_options_.output, "Model file (HDF5; other models in it are kept)")
+        ->required();
+    train_->add_flag("--json", json_, "Print the summary as JSON");
+    score_ = sub_->add_subcommand("score",
+                                  "Score takes with a key model: write the decoded keys and gesture extents "
+                                  "as tiers; with label tiers, report accuracies");
+    score_->add_option("corpus", score_options_.corpus, "Corpus file")->required();
+    score_->add_option("--keys", score_options_.keys, "Model file with a key model (csw keys train)")->required();
+    score_->add_option("--takes", score_options_.takes,
+                       "Takes, comma-separated names or glob patterns; default every take but fill versions");
+    score_->add_option("--tier", score_options_.tier, "Label tier to score against, when present")
+        ->capture_default_str();
+    score_
+        ->add_option("--placement-tier", score_options_.placement_tier,
+                     "Point tier of placement targets, when present (else --tier)")
+        ->capture_default_str();
+    score_->add_option("--markerset", score_options_.markerset,
+                       "Marker-set JSON; default the one each take was imported with");
+    score_->add_option("--min-key", score_options_.decode.min_key_ms, "Free decoding: shortest key (ms)")
+        ->capture_default_str();
+    score_->add_flag("--dry-run", score_options_.dry_run, "Report only: write no tier");
+    score_->add_flag("--json", json_, "Print the report as JSON");
+    suggest_ = sub_->add_subcommand("suggest",
+                                    "Propose a target frame for every expected key (the hand-speed minimum nearest "
+                                    "its expected time): point tiers keys_suggested and placement_suggested");
+    suggest_->add_option("corpus", suggest_options_.corpus, "Corpus file")->required();
+    suggest_->add_option("--takes", suggest_options_.takes,
+                         "Takes, comma-separated names or glob patterns; default every take but fill versions");
+    suggest_->add_option("--phones", suggest_options_.phones, "The phone tier")->capture_default_str();
+    suggest_->add_option("--symbols", suggest_options_.symbols, "Phone symbols: auto, ipa, mfa, xsampa or sppas")
+        ->capture_default_str();
+    suggest_->add_option("--markerset", suggest_options_.markerset,
+                         "Marker-set JSON; default the one each take was imported with");
+    suggest_->add_option("--layout", suggest_options_.layout,
+                         "JSON file with a hand_layout section naming the finger, palm and head markers");
+    suggest_->add_option("--phasing", suggest_options_.phasing,
+                         "Phasing model JSON for the expected target times (default: Attina's means)");
+    suggest_->add_option("--cutoff", suggest_options_.suggest.cutoff_hz, "Low-pass cut-off of the features (Hz)")
+        ->capture_default_str();
+    suggest_->add_option("--search", suggest_options_.suggest.search_s, "Half-width of the search window (s)")
+        ->capture_default_str();
+    suggest_->add_option("--tier", suggest_options_.tier, "Point tier of the suggested shape targets")
+        ->capture_default_str();
+    suggest_
+        ->add_option("--placement-tier", suggest_options_.placement_tier,
+                     "Point tier of the suggested placement targets")
+        ->capture_default_str();
+    suggest_->add_flag("--dry-run", suggest_options_.dry_run, "Report only: write no tier");
+    suggest_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (train_->parsed()) {
+      PriorKind kind = PriorKind::kUniform;
+      keys::ParsePriorKind(priors_, &kind);
+      train_options_.model.shape.priors = kind;
+      train_options_.model.placement.priors = kind;
+      train_options_.model.placement.shrinkage_samples = train_options_.model.shape.shrinkage_samples;
+      train_options_.model.placement.min_variance = train_options_.model.shape.min_variance;
+      if (std::string why = train_options_.Check(); !why.empty()) throw UsageError(why);
+      const nlohmann::json r = jobs::KeysTrain(train_options_, progress);
+      if (json_) {
+        PrintJson(r);
+      } else {
+        std::cout << jobs::KeysTrainText(r);
+      }
+      return 0;
+    }
+    if (suggest_->parsed()) {
+      if (std::string why = suggest_options_.Check(); !why.empty()) throw UsageError(why);
+      const nlohmann::json r = jobs::KeysSuggest(suggest_options_, progress);
+      if (json_) {
+        PrintJson(r);
+      } else {
+        std::cout << jobs::KeysSuggestText(r);
+      }
+      return 0;
+    }
+    if (std::string why = score_options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::KeysScore(score_options_, progress);
+    if (json_) {
+      PrintJson(r);
+    } else {
+      std::cout << jobs::KeysScoreText(r);
+    }
+    return 0;
+  }
+
+ private:
+  using PriorKind = keys::PriorKind;
+  CLI::App* train_ = nullptr;
+  CLI::App* score_ = nullptr;
+  CLI::App* suggest_ = nullptr;
+  jobs::KeysTrainOptions train_options_;
+  jobs::KeysScoreOptions score_options_;
+  jobs::KeysSuggestOptions suggest_options_;
+  std::string priors_ = "uniform";
+  bool json_ = false;
+};
+
+class PhasingCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("phasing",
+                              "Hand-speech phasing: onset and target of every key's shape and placement gestures "
+                              "(kinematic and posterior), relative to A1, per key type (docs/analysis-phasing.md)");
+    sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
+    sub_->add_option("--keys", options_.keys, "Model file with a key model (csw keys train)")->required();
+    sub_->add_option("--takes", options_.takes,
+                     "Takes, comma-separated names or glob patterns; default every take but fill versions");
+    sub_->add_option("--phones", options_.phones, "The phone tier")->capture_default_str();
+    sub_->add_option("--symbols", options_.symbols, "Phone symbols: auto, ipa, mfa, xsampa or sppas")
+        ->capture_default_str();
+    sub_->add_option("--markerset", options_.markerset, "Marker-set JSON; default the one each take was imported with");
+    sub_->add_option("--csv", options_.csv, "Write one row per key (times on the take's clock and from A1)");
+    sub_->add_option("--figures", options_.figures, "Folder for the histograms and gestural scores (PNG)");
+    sub_->add_option("--truth", options_.truth,
+                     "Folder with <take>.truth.json (csw simulate): true times beside the estimates");
+    sub_->add_option("--reference", options_.reference,
+                     "Phasing model JSON drawn as the histograms' reference (default: Attina's means)");
+    sub_->add_option("--targets", options_.targets,
+                     "Rough target times: labels (tiers keys / placement_targets), aligned (decoding) or auto")
+        ->capture_default_str();
+    sub_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::Phasing(options_, progress);
+    if (json_) {
+      PrintJson(r);
+    } else {
+      std::cout << jobs::PhasingText(r);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::PhasingOptions options_;
+  bool json_ = false;
+};
+
 class PackCommand : public Command {
  public:
   void Register(CLI::App& app) override {
@@ -434,6 +612,8 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<InvertCommand>());
   c.push_back(std::make_unique<CleanCommand>());
   c.push_back(std::make_unique<CueCommand>());
+  c.push_back(std::make_unique<KeysCommand>());
+  c.push_back(std::make_unique<PhasingCommand>());
   c.push_back(std::make_unique<PackCommand>());
   c.push_back(std::make_unique<UpgradeCommand>());
   return c;

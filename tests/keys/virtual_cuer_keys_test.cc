@@ -1,0 +1,416 @@
+// Key recognition on the virtual cuer (issue 11 "Done when"): default options
+// (overlapping gestures, noise, occlusions, dropouts), raw takes (missing
+// markers marginalised), trained on the labelled targets of the first third of
+// the sentences, scored on the rest.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <numeric>
+#include <random>
+
+#include "analysis/cleaning/dct_fill.h"
+#include "analysis/cleaning/fill.h"
+#include "analysis/cleaning/spline_fill.h"
+#include "analysis/keys/hand_features.h"
+#include "analysis/keys/key_decoding.h"
+#include "analysis/keys/key_model.h"
+#include "core/error.h"
+#include "datasets/virtual_cuer.h"
+#include "models/gaussian_fill.h"
+#include "models/rigid_motion.h"
+#include "tests/testing/testing.h"
+
+namespace csw::keys {
+namespace {
+
+const LabelTier* FindTier(const Take& take, const std::string& name) {
+  for (const auto& t : take.tiers)
+    if (t.name == name) return &t;
+  return nullptr;
+}
+
+SimulateOptions Defaults() {
+  SimulateOptions o;
+  o.audio = false;  // motion only: the audio does not change the markers
+  return o;
+}
+
+TEST(HandLayout, DerivedFromSegmentChainsNotNames) {
+  const VirtualCuer cuer(Defaults());
+  const SimulationResult r = cuer.SimulateShapes("shapes", {1, 5, 8});
+  MarkerSet set = cuer.MakeMarkerSet(CorpusKind::kShapes);
+  const MarkerBinding binding = BindMarkerSet(set, r.take.marker_names, false);
+  const HandLayout layout = DeriveHandLayout(set, r.take.markers, binding, "shapes");
+  // Known answer from the virtual hand's definition (datasets/virtual_cuer.cc):
+  // proximal phalanx markers "?1P", tip markers "?TIP".
+  EXPECT_EQ(layout.proximal, (std::array<std::string, 5>{"T1P", "I1P", "M1P", "R1P", "L1P"}));
+  EXPECT_EQ(layout.distal, (std::array<std::string, 5>{"TTIP", "ITIP", "MTIP", "RTIP", "LTIP"}));
+  EXPECT_EQ(layout.palm, set.palm);
+  EXPECT_EQ(layout.head, set.head_cluster);
+  EXPECT_EQ(layout.thumb_palm, "KNL");  // the little finger's knuckle
+
+  // Segment names and order carry no meaning: renamed and shuffled, same layout.
+  MarkerSet renamed = set;
+  std::map<std::string, std::string> new_name;
+  for (size_t i = 0; i < renamed.hand_segments.size(); ++i)
+    new_name[renamed.hand_segments[i].name] = "seg" + std::to_string((i * 7) % 16);
+  for (auto& s : renamed.hand_segments) {
+    s.name = new_name[s.name];
+    if (!s.parent.empty()) s.parent = new_name[s.parent];
+  }
+  std::reverse(renamed.hand_segments.begin() + 1, renamed.hand_segments.end());
+  EXPECT_EQ(DeriveHandLayout(renamed, r.take.markers, binding, "shapes"), layout);
+
+  // The explicit section names the same markers; errors name the place.
+  const auto json = HandLayoutToJson(layout);
+  EXPECT_EQ(ParseHandLayout(json, set, "lab.json: hand_layout"), layout);
+  auto bad = json;
+  bad["fingers"]["pinky"] = {"A", "B"};
+  try {
+    ParseHandLayout(bad, set, "lab.json: hand_layout");
+    FAIL() << "unknown finger accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("lab.json: hand_layout: unknown finger \"pinky\""), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(HandFeatures, DistancesSeparateTheShapesAndMissingMarkersGiveNaN) {
+  SimulateOptions o = Defaults();
+  o.noise_mm = 0;
+  o.occlusions = false;
+  o.dropouts_per_s = 0;
+  const VirtualCuer cuer(o);
+  const SimulationResult r = cuer.SimulateShapes("shapes", {1, 6, 2, 8});
+  const MarkerSet set = cuer.MakeMarkerSet(CorpusKind::kShapes);
+  const MarkerBinding binding = BindMarkerSet(set, r.take.marker_names, false);
+  const HandLayout layout = DeriveHandLayout(set, r.take.markers, binding);
+  const Eigen::Matrix3Xd head = HeadReference(r.take.markers, binding, layout);
+  const HandFeatures f = ComputeHandFeatures(r.take.markers, binding, layout, head);
+  ASSERT_EQ(f.frames(), r.take.frames());
+  // At each key's shape target the features show the posture: shape 1 (index
+  // only) vs 6 (index + thumb): thumb-palm distance larger for 6; 2 vs 8: the
+  // index-middle tip distance larger for 8 (spread); index extended in all four
+  // and middle extended only in 2 and 8.
+  std::map<int, Eigen::RowVectorXd> at;
+  for (const auto& k : r.keys)
+    if (k.key.shape != 0) at[k.key.shape] = f.distances.row(std::llround(k.timing.shape_target_s * r.take.rate_hz));
+  ASSERT_EQ(at.size(), 4u);
+  EXPECT_GT(at[6](6), at[1](6) + 20);  // thumb tip to the palm's ulnar edge (mm): 154 vs 118 at rest pose
+  EXPECT_GT(at[8](5), at[2](5) + 10);  // index-middle tips
+  EXPECT_GT(at[2](2), at[1](2) + 20);  // middle extension
+  EXPECT_GT(at[1](1), at[1](2) + 20);  // index extended, middle folded
+
+  // A hidden thumb tip: thumb extension and thumb-palm distance NaN, the rest kept.
+  MarkerArray hidden = r.take.markers;
+  const int64_t t = r.take.frames() / 2;
+  hidden.SetMissing(t, binding.At("TTIP"));
+  const HandFeatures g = ComputeHandFeatures(hidden, binding, layout, head);
+  EXPECT_TRUE(std::isnan(g.distances(t, 0)));
+  EXPECT_TRUE(std::isnan(g.distances(t, 6)));
+  EXPECT_NEAR(g.distances(t, 1), f.distances(t, 1), 1e-9);
+  EXPECT_NEAR(g.index_tip(t, 2), f.index_tip(t, 2), 1e-9);
+}
+
+// The "model fill" of the hand: the hand markers in the palm frame (rigid fit
+// of the palm markers) as one Gaussian vector (models/gaussian_fill.h, EM on
+// the training takes' incomplete frames); missing hand markers of a frame are
+// its conditional mean given the seen ones. Frames with < 3 palm markers stay.
+struct PalmFrames {
+  std::vector<int> palm_cols, hand_cols;
+  Eigen::Matrix3Xd reference;
+  // frames × 3·hand markers in the palm frame, NaN when missing; transforms per frame.
+  Eigen::MatrixXd Local(const MarkerArray& m, std::vector<RigidTransform>* pose, std::vector<uint8_t>* ok) const {
+    Eigen::MatrixXd out = Eigen::MatrixXd::Constant(m.frames(), 3 * static_cast<Eigen::Index>(hand_cols.size()),
+                                                    std::numeric_limits<double>::quiet_NaN());
+    pose->assign(static_cast<size_t>(m.frames()), RigidTransform{});
+    ok->assign(static_cast<size_t>(m.frames()), 0);
+    Eigen::Matrix3Xd obs(3, static_cast<Eigen::Index>(palm_cols.size()));
+    for (int64_t t = 0; t < m.frames(); ++t) {
+      for (size_t i = 0; i < palm_cols.size(); ++i) {
+        const float* v = m.at(t, palm_cols[i]);
+        obs.col(static_cast<Eigen::Index>(i)) = Eigen::Vector3d(v[0], v[1], v[2]);
+      }
+      const RigidFit fit = EstimateRigidKabsch(reference, obs);
+      if (!fit.valid) continue;
+      (*pose)[static_cast<size_t>(t)] = fit.transform;
+      (*ok)[static_cast<size_t>(t)] = 1;
+      const RigidTransform inv = fit.transform.Inverse();
+      for (size_t j = 0; j < hand_cols.size(); ++j) {
+        const float* v = m.at(t, hand_cols[j]);
+        if (!std::isfinite(v[0])) continue;
+        out.block<1, 3>(t, 3 * static_cast<Eigen::Index>(j)) = inv.Apply(Eigen::Vector3d(v[0], v[1], v[2])).transpose();
+      }
+    }
+    return out;
+  }
+};
+
+MarkerArray ModelFill(const PalmFrames& pf, const GaussianFill& fill, const MarkerArray& in) {
+  std::vector<RigidTransform> pose;
+  std::vector<uint8_t> ok;
+  const Eigen::MatrixXd local = pf.Local(in, &pose, &ok);
+  MarkerArray out = in;
+  GaussianFiller filler(fill);
+  for (int64_t t = 0; t < in.frames(); ++t) {
+    if (!ok[static_cast<size_t>(t)]) continue;
+    Eigen::Matrix3Xd x = Eigen::Map<const Eigen::Matrix3Xd>(local.row(t).eval().data(), 3,
+                                                            static_cast<Eigen::Index>(pf.hand_cols.size()));
+    if (filler.Fill(&x) == 0) continue;
+    for (size_t j = 0; j < pf.hand_cols.size(); ++j) {
+      if (in.Visible(t, pf.hand_cols[j])) continue;
+      const Eigen::Vector3d p = pose[static_cast<size_t>(t)].Apply(x.col(static_cast<Eigen::Index>(j)));
+      for (int c = 0; c < 3; ++c) out.at(t, pf.hand_cols[j])[c] = static_cast<float>(p[c]);
+    }
+  }
+  return out;
+}
+
+struct Scored {
+  SimulationResult r;
+  std::array<HandFeatures, 3> features;  // spline/DCT-filled take, clean markers, model-filled take
+  KeyLabels labels;
+};
+
+struct Tally {
+  Confusion shape{kNumShapes}, placement{kNumPlacements};
+  Confusion shape_reached{kNumShapes}, shape_approached{kNumShapes};
+  Confusion placement_reached{kNumPlacements}, placement_approached{kNumPlacements};
+  int free_expected = 0, free_matches = 0, free_insertions = 0, free_deletions = 0, free_substitutions = 0;
+  int aligned_keys = 0, aligned_correct = 0;
+  std::vector<double> aligned_error_ms, aligned_shape_error_ms, aligned_placement_error_ms;
+  std::vector<double> aligned_error_reached_ms, aligned_error_approached_ms;
+  double free_rate = 0, aligned_rate = 0;
+};
+
+double Mean(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+}
+
+// Trains on takes [0, train) and scores the others, with feature set `variant`
+// (0 = filled take, 1 = markers without artefacts).
+Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const HandLayout& layout,
+               const Eigen::Matrix3Xd& head, const std::string& name) {
+  KeyModelOptions mo;
+  KeyTrainingSet ts;
+  for (int i = 0; i < train; ++i) ts.Add(takes[i].features[variant], takes[i].labels, mo);
+  const KeyModel model = TrainKeyModel(ts, layout, head, mo);
+  Tally tally;
+
+  // Missing feature share at the held-out targets (raw takes).
+  int64_t incomplete = 0, targets = 0;
+  std::array<int64_t, kNumDistances + 1> missing_dim{};
+  for (int i = train; i < static_cast<int>(takes.size()); ++i) {
+    const Scored& s = takes[i];
+    const double rate = s.r.take.rate_hz;
+    const KeyPosteriors post = ScoreFrames(model, s.features[variant]);
+    // Approached keys: the next key's movement of that component starts before
+    // this key's target (overlapping gestures), so the target is not reached.
+    const auto& truth = s.r.keys;
+    std::vector<bool> shape_approached(truth.size(), false), placement_approached(truth.size(), false);
+    for (size_t k = 0; k + 1 < truth.size(); ++k) {
+      shape_approached[k] = truth[k + 1].timing.shape_start_s < truth[k].timing.shape_target_s;
+      placement_approached[k] = truth[k + 1].timing.placement_start_s < truth[k].timing.placement_target_s;
+    }
+    for (size_t k = 0; k < truth.size(); ++k) {
+      const int64_t fs = std::clamp<int64_t>(std::llround(truth[k].timing.shape_target_s * rate), 0, s.r.frames() - 1);
+      const int64_t fp =
+          std::clamp<int64_t>(std::llround(truth[k].timing.placement_target_s * rate), 0, s.r.frames() - 1);
+      ++targets;
+      if (!s.features[variant].distances.row(fs).allFinite()) ++incomplete;
+      for (int dd = 0; dd < kNumDistances; ++dd)
+        missing_dim[dd] += std::isnan(s.features[variant].distances(fs, dd)) ? 1 : 0;
+      missing_dim[7] += std::isnan(post.placement_features(fp, 0)) ? 1 : 0;
+      const int ds = ArgMax(post.shape, fs), dp = ArgMax(post.placement, fp);
+      tally.shape.Add(truth[k].key.shape, ds);
+      tally.placement.Add(truth[k].key.placement, dp);
+      (shape_approached[k] ? tally.shape_approached : tally.shape_reached).Add(truth[k].key.shape, ds);
+      (placement_approached[k] ? tally.placement_approached : tally.placement_reached).Add(truth[k].key.placement, dp);
+    }
+    // Free decoding against the expected sequence.
+    std::vector<std::string> expected;
+    std::vector<ExpectedKey> expected_keys;
+    for (const auto& k : truth) {
+      expected.push_back(k.key.Code());
+      expected_keys.push_back({k.key.placement, k.key.shape});
+    }
+    const auto free = DecodeFree(post, rate);
+    std::vector<std::string> decoded;
+    for (const auto& k : free) decoded.push_back(k.Code());
+    const EditAlignment a = AlignSequences(decoded, expected);
+    tally.free_expected += static_cast<int>(expected.size());
+    tally.free_matches += a.matches;
+    tally.free_insertions += a.insertions;
+    tally.free_deletions += a.deletions;
+    tally.free_substitutions += a.substitutions;
+    // Aligned decoding: target frame vs the labelled (shape) target.
+    const auto aligned = DecodeAligned(post, expected_keys, rate);
+    for (size_t k = 0; k < truth.size(); ++k) {
+      // Components that change from the previous key have a target; the key's
+      // error is the mean over them (the key target vs the shape target when
+      // neither changes).
+      const bool shape_changes = k == 0 || truth[k].key.shape != truth[k - 1].key.shape;
+      const bool place_changes = k == 0 || truth[k].key.placement != truth[k - 1].key.placement;
+      const double es = 1000.0 * std::abs(aligned[k].shape_target_frame / rate - truth[k].timing.shape_target_s);
+      const double ep =
+          1000.0 * std::abs(aligned[k].placement_target_frame / rate - truth[k].timing.placement_target_s);
+      const double err = shape_changes && place_changes ? 0.5 * (es + ep)
+                         : shape_changes                ? es
+                         : place_changes
+                             ? ep
+                             : 1000.0 * std::abs(aligned[k].target_frame / rate - truth[k].timing.shape_target_s);
+      tally.aligned_error_ms.push_back(err);
+      (shape_approached[k] || placement_approached[k] ? tally.aligned_error_approached_ms
+                                                      : tally.aligned_error_reached_ms)
+          .push_back(err);
+      if (shape_changes) tally.aligned_shape_error_ms.push_back(es);
+      if (place_changes) tally.aligned_placement_error_ms.push_back(ep);
+      ++tally.aligned_keys;
+      if (std::getenv("CSW_KEYS_DEBUG") != nullptr && i == train)
+        std::cout << truth[k].key.Code() << " truth s/p " << std::llround(truth[k].timing.shape_target_s * rate) << "/"
+                  << std::llround(truth[k].timing.placement_target_s * rate) << " seg " << aligned[k].start_frame << "-"
+                  << aligned[k].end_frame << " target " << aligned[k].target_frame << " s/p "
+                  << aligned[k].shape_target_frame << "/" << aligned[k].placement_target_frame << "\n";
+      if (err <= 40.0) ++tally.aligned_correct;
+    }
+  }
+  tally.free_rate = static_cast<double>(tally.free_matches) / tally.free_expected;
+  tally.aligned_rate = static_cast<double>(tally.aligned_correct) / tally.aligned_keys;
+  std::cout << name << ": held-out takes " << static_cast<int>(takes.size()) - train << ", targets " << targets
+            << " (features incomplete at " << incomplete << "; missing per distance, then placement:";
+  for (auto m : missing_dim) std::cout << " " << m;
+  std::cout << ")\n"
+            << "shape accuracy " << tally.shape.Accuracy() << " of " << tally.shape.Total() << " (reached "
+            << tally.shape_reached.Accuracy() << " of " << tally.shape_reached.Total() << ", approached "
+            << tally.shape_approached.Accuracy() << " of " << tally.shape_approached.Total() << ")\n"
+            << "placement accuracy " << tally.placement.Accuracy() << " of " << tally.placement.Total() << " (reached "
+            << tally.placement_reached.Accuracy() << " of " << tally.placement_reached.Total() << ", approached "
+            << tally.placement_approached.Accuracy() << " of " << tally.placement_approached.Total() << ")\n"
+            << "free decoding " << tally.free_matches << " / " << tally.free_expected << " = " << tally.free_rate
+            << " (subs " << tally.free_substitutions << ", ins " << tally.free_insertions << ", del "
+            << tally.free_deletions << ")\n"
+            << "aligned " << tally.aligned_correct << " / " << tally.aligned_keys << " = " << tally.aligned_rate
+            << ", key target error mean " << Mean(tally.aligned_error_ms) << " ms; shape target "
+            << Mean(tally.aligned_shape_error_ms) << " ms, placement target " << Mean(tally.aligned_placement_error_ms)
+            << " ms; reached keys " << Mean(tally.aligned_error_reached_ms) << " ms ("
+            << tally.aligned_error_reached_ms.size() << "), approached " << Mean(tally.aligned_error_approached_ms)
+            << " ms (" << tally.aligned_error_approached_ms.size() << ")\n"
+            << "shape confusion (rows truth)\n"
+            << tally.shape.counts << "\nplacement confusion\n"
+            << tally.placement.counts << "\n";
+  return tally;
+}
+
+TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
+  const int sentences = testing::kSanitized ? 6 : 30;
+  const VirtualCuer cuer(Defaults());
+  const MarkerSet set = cuer.MakeMarkerSet();
+  const std::vector<std::string> texts = ShippedSentences();
+  ASSERT_GE(static_cast<int>(texts.size()), sentences);
+  std::vector<Scored> takes;
+  HandLayout layout;
+  Eigen::Matrix3Xd head;
+  for (int i = 0; i < sentences; ++i) {
+    Scored s;
+    s.r = cuer.SimulateSentence("s" + std::to_string(i), texts[static_cast<size_t>(i)]);
+    const MarkerBinding binding = BindMarkerSet(set, s.r.take.marker_names, false);
+    if (i == 0) {
+      layout = DeriveHandLayout(set, s.r.take.markers, binding, s.r.take.name);
+      head = HeadReference(s.r.take.markers, binding, layout);
+    }
+    // The filled take (spline, then DCT, gaps up to 0.5 s, as `csw clean --fill`);
+    // what stays missing is marginalised. Also the markers without artefacts,
+    // to separate the recogniser from the capture.
+    const cleaning::SplineFiller spline{cleaning::SplineFillOptions{}};
+    const cleaning::DctFiller dct{cleaning::DctFillOptions{}};
+    MarkerArray filled;
+    cleaning::FillGaps(s.r.take.markers, {&spline, &dct}, static_cast<int64_t>(0.5 * s.r.take.rate_hz), &filled);
+    s.features[0] = ComputeHandFeatures(filled, binding, layout, head);
+    s.features[1] = ComputeHandFeatures(s.r.clean, binding, layout, head);
+    const LabelTier* keys = FindTier(s.r.take, "keys");
+    const LabelTier* places = FindTier(s.r.take, "placement_targets");
+    ASSERT_NE(keys, nullptr);
+    ASSERT_NE(places, nullptr);
+    s.labels = LabelsFromTiers(*keys, places, s.r.take.rate_hz, s.r.take.frames(), s.r.take.name);
+    takes.push_back(std::move(s));
+  }
+  const int train = sentences / 3;
+  {
+    // Model-filled takes (variant 2): the palm-frame Gaussian fill trained on
+    // the training takes' raw markers.
+    PalmFrames pf;
+    const MarkerBinding b0 = BindMarkerSet(set, takes[0].r.take.marker_names, false);
+    for (const auto& m : layout.palm) pf.palm_cols.push_back(b0.At(m));
+    for (const auto& seg : set.hand_segments)
+      for (const auto& m : seg.markers)
+        if (std::find(pf.hand_cols.begin(), pf.hand_cols.end(), b0.At(m)) == pf.hand_cols.end())
+          pf.hand_cols.push_back(b0.At(m));
+    pf.reference = ClusterReference(takes[0].r.take.markers, pf.palm_cols);
+    std::vector<Eigen::MatrixXd> blocks;
+    Eigen::Index rows = 0;
+    for (int i = 0; i < train; ++i) {
+      std::vector<RigidTransform> pose;
+      std::vector<uint8_t> ok;
+      blocks.push_back(pf.Local(takes[i].r.take.markers, &pose, &ok));
+      rows += blocks.back().rows();
+    }
+    Eigen::MatrixXd data(rows, blocks[0].cols());
+    rows = 0;
+    for (const auto& b : blocks) {
+      data.middleRows(rows, b.rows()) = b;
+      rows += b.rows();
+    }
+    GaussianFillOptions fo;
+    if (testing::kSanitized) fo.max_iterations = 20;
+    const GaussianFill fill = FitGaussianFill(data, fo);
+    for (auto& s : takes) {
+      const MarkerBinding binding = BindMarkerSet(set, s.r.take.marker_names, false);
+      s.features[2] = ComputeHandFeatures(ModelFill(pf, fill, s.r.take.markers), binding, layout, head);
+    }
+  }
+  const Tally filled = Evaluate(takes, train, 0, layout, head, "filled takes");
+  const Tally clean = Evaluate(takes, train, 1, layout, head, "clean markers");
+  const Tally model = Evaluate(takes, train, 2, layout, head, "model-filled takes");
+  RecordProperty("shape_accuracy", std::to_string(model.shape.Accuracy()));
+  RecordProperty("placement_accuracy", std::to_string(model.placement.Accuracy()));
+  RecordProperty("free_rate", std::to_string(model.free_rate));
+  RecordProperty("aligned_rate", std::to_string(model.aligned_rate));
+  RecordProperty("aligned_error_ms", std::to_string(Mean(model.aligned_error_ms)));
+  if (testing::kSanitized) {
+    // 6 sentences, 2 for training: too few for the statistics; the rest keys
+    // (00, two per take, far from everything) must still be found.
+    EXPECT_GE(clean.shape.counts(0, 0), clean.shape.counts.row(0).sum() - 1);
+    return;
+  }
+  // Issue 11's bars are shape and placement >= 0.97, free >= 0.90, aligned
+  // >= 0.98 within 40 ms, mean target error <= 25 ms. NOT MET (docs/analysis.md).
+  // Measured on the filled takes (seed 1, 30 sentences, 236 held-out keys):
+  // shape 0.754, placement 0.839, free 190/236 = 0.805 (148 insertions),
+  // aligned 23/236 = 0.097 within 40 ms, mean target error 104 ms. Clean markers:
+  // shape 0.903 (reached keys 1.000, approached 0.566), placement 0.903
+  // (reached 0.985, approached 0.792), free 0.873, aligned 0.136, 93 ms.
+  // Model-filled takes (palm-frame Gaussian fill trained on the training
+  // takes): shape 0.915 (reached 1.000, approached 0.623), placement 0.907
+  // (reached 0.985, approached 0.802), free 204/236 = 0.864, aligned 0.140, 94 ms.
+  // The floors below guard those numbers against regressions.
+  EXPECT_GE(model.shape_reached.Accuracy(), 0.99);
+  EXPECT_GE(model.placement_reached.Accuracy(), 0.97);
+  EXPECT_GE(model.shape.Accuracy(), 0.89);
+  EXPECT_GE(model.placement.Accuracy(), 0.88);
+  EXPECT_GE(model.free_rate, 0.84);
+  EXPECT_GE(clean.shape_reached.Accuracy(), 0.99);
+  EXPECT_GE(clean.placement_reached.Accuracy(), 0.97);
+  EXPECT_GE(clean.shape.Accuracy(), 0.88);
+  EXPECT_GE(clean.placement.Accuracy(), 0.88);
+  EXPECT_GE(clean.free_rate, 0.85);
+  EXPECT_GE(filled.shape.Accuracy(), 0.72);
+  EXPECT_GE(filled.placement.Accuracy(), 0.80);
+  EXPECT_GE(filled.free_rate, 0.78);
+  EXPECT_LE(Mean(filled.aligned_error_ms), 115.0);
+}
+
+}  // namespace
+}  // namespace csw::keys

@@ -1,0 +1,228 @@
+// csw keys suggest and csw phasing (workbench/jobs/keys_suggest_job.h,
+// phasing_job.h): option checks, the text output, and both jobs end to end on
+// virtual-cuer sentences whose true key targets and gesture times are known.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "core/error.h"
+#include "core/markerset.h"
+#include "datasets/virtual_cuer.h"
+#include "io/corpus/corpus.h"
+#include "tests/testing/testing.h"
+#include "workbench/jobs/job_util.h"
+#include "workbench/jobs/keys_job.h"
+#include "workbench/jobs/keys_suggest_job.h"
+#include "workbench/jobs/phasing_job.h"
+
+namespace csw::jobs {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+TEST(KeysSuggestOptionsCheck, ReasonsForBadRequests) {
+  KeysSuggestOptions o;
+  EXPECT_EQ(o.Check(), "no corpus given");
+  o.corpus = "c.h5";
+  EXPECT_EQ(o.Check(), "");
+  o.symbols = "klingon";
+  EXPECT_EQ(o.Check(), "--symbols must be auto, ipa, mfa, xsampa or sppas, not 'klingon'");
+  o.symbols = "auto";
+  o.tier = "keys";
+  EXPECT_EQ(o.Check(), "the suggestion tier 'keys' would replace the phone or label tier of that name");
+  o.tier = "placement_suggested";
+  EXPECT_EQ(o.Check(), "the shape and placement suggestion tiers must differ");
+  o.tier = "keys_suggested";
+  o.suggest.search_s = -1;
+  EXPECT_EQ(o.Check(), "the search half-width must be a positive number of seconds");
+}
+
+TEST(PhasingOptionsCheck, ReasonsForBadRequests) {
+  PhasingOptions o;
+  EXPECT_EQ(o.Check(), "no corpus given");
+  o.corpus = "c.h5";
+  EXPECT_EQ(o.Check(), "--keys must name a model file with a key model (csw keys train)");
+  o.keys = "k.h5";
+  EXPECT_EQ(o.Check(), "");
+  o.phones = "";
+  EXPECT_EQ(o.Check(), "--phones must name the phone tier");
+}
+
+TEST(KeysSuggestText, RendersMissingKeysAndTheComparison) {
+  const json r = {
+      {"takes",
+       {{{"take", "s1"},
+         {"keys", 3},
+         {"shape",
+          {{"suggested", 2},
+           {"missing", {{{"key", 2}, {"code", "31"}, {"expected_s", 1.25}, {"why", "no valid samples"}}}}}},
+         {"placement", {{"suggested", 3}, {"missing", json::array()}}},
+         {"labels",
+          {{"shape", {{"matched", 2}, {"suggested", 2}, {"within_40ms", 1}, {"mean", 25.0}, {"max", 41.5}}},
+           {"placement",
+            {{"matched", 0}, {"suggested", 3}, {"within_40ms", 0}, {"mean", nullptr}, {"max", nullptr}}}}}}}},
+      {"keys", 3},
+      {"suggested", 2},
+      {"tiers", {"keys_suggested", "placement_suggested"}},
+      {"tiers_written", true}};
+  EXPECT_EQ(KeysSuggestText(r),
+            "take s1: 3 keys; shape targets 2, placement targets 3 suggested\n"
+            "  no shape target for key 2 (31, expected at 1.25 s): no valid samples\n"
+            "  shape vs labels: 2 of 2 matched, 1 within 40 ms, error 25 ms mean, 41.5 ms max\n"
+            "  placement vs labels: 0 of 3 matched, 0 within 40 ms, error -\n"
+            "2 of 3 keys have a suggested shape target; tiers 'keys_suggested' and 'placement_suggested' written\n");
+}
+
+// Six virtual-cuer sentences (no occlusions) with audio off, in a corpus that
+// remembers the marker set, and their truth files.
+struct Fixture {
+  testing::TempDir dir;
+  std::string corpus, keys, truth;
+  std::vector<SimulationResult> sims;
+  Fixture() {
+    corpus = (dir / "c.h5").string();
+    keys = (dir / "keys.h5").string();
+    truth = (dir / "truth").string();
+    fs::create_directories(truth);
+    SimulateOptions o;
+    o.audio = false;
+    o.occlusions = false;
+    const VirtualCuer cuer(o);
+    const std::string set = MarkerSetToJson(cuer.MakeMarkerSet());
+    const auto texts = ShippedSentences();
+    CorpusTransaction tx(corpus);
+    const int n = testing::kSanitized ? 4 : 6;
+    for (int i = 0; i < n; ++i) {
+      sims.push_back(cuer.SimulateSentence("s" + std::to_string(i), texts[static_cast<size_t>(i)]));
+      Take t = sims.back().take;
+      t.markerset_json = set;
+      tx.WriteTake(t);
+      std::ofstream(fs::path(truth) / ("s" + std::to_string(i) + ".truth.json")) << TruthToJson(sims.back());
+    }
+    tx.Commit();
+  }
+};
+
+TEST(KeysSuggestJob, SuggestionsLandNearTheTrueTargetsAndAreWritten) {
+  Fixture fx;
+  Progress progress;
+  KeysSuggestOptions o;
+  o.corpus = fx.corpus;
+  const json r = KeysSuggest(o, progress);
+  ASSERT_EQ(r["takes"].size(), fx.sims.size());
+  EXPECT_TRUE(r["tiers_written"].get<bool>());
+  const Corpus c = Corpus::Open(fx.corpus);
+  std::vector<double> errors;
+  int64_t within = 0, compared = 0;
+  for (size_t i = 0; i < fx.sims.size(); ++i) {
+    const SimulationResult& sim = fx.sims[i];
+    const Take take = c.LoadTake(sim.take.name);
+    std::map<std::string, const LabelTier*> tiers;
+    for (const auto& t : take.tiers) tiers[t.name] = &t;
+    ASSERT_EQ(tiers.count("keys_suggested"), 1u);
+    ASSERT_EQ(tiers.count("placement_suggested"), 1u);
+    ASSERT_EQ(tiers.count("phones"), 1u);  // the other tiers are kept
+    // Every suggested shape target against the true shape target of the key of
+    // that code nearest to it (the simulation's ground truth).
+    for (const Label& l : tiers["keys_suggested"]->labels) {
+      double best = 1e9;
+      for (const GestureTruth& g : sim.keys)
+        if (g.key.Code() == l.text) best = std::min(best, std::abs(g.timing.shape_target_s - l.start_s));
+      ASSERT_LT(best, 1e8) << l.text << " is not a key of " << sim.take.name;
+      errors.push_back(best);
+      ++compared;
+      if (best <= 0.040) ++within;
+    }
+    // The job's own comparison with the take's label tier agrees in count.
+    EXPECT_EQ(r["takes"][i]["labels"]["shape"]["suggested"].get<int64_t>(),
+              static_cast<int64_t>(tiers["keys_suggested"]->labels.size()));
+  }
+  // Measured on these six sentences (2026-12-02): 66 % of the suggestions
+  // within 40 ms of the true target, mean error 36 ms; a clean capture with the
+  // default phasing laws. Limits just under that, to catch a regression.
+  ASSERT_GT(compared, 40);
+  double mean = 0;
+  for (double e : errors) mean += e;
+  mean /= static_cast<double>(errors.size());
+  EXPECT_GE(static_cast<double>(within) / static_cast<double>(compared), 0.6) << "mean error " << mean;
+  EXPECT_LT(mean, 0.045);
+  // At least 90 % of the keys get a shape suggestion.
+  EXPECT_GE(r["suggested"].get<double>(), 0.9 * r["keys"].get<double>());
+}
+
+TEST(PhasingJob, KinematicTimesFollowTheTruthAndTheCsvHasOneRowPerKey) {
+  Fixture fx;
+  Progress progress;
+  KeysTrainOptions t;
+  t.corpus = fx.corpus;
+  t.takes = {"s*"};
+  t.output = fx.keys;
+  KeysTrain(t, progress);
+  PhasingOptions o;
+  o.corpus = fx.corpus;
+  o.keys = fx.keys;
+  o.truth = fx.truth;
+  o.csv = (fx.dir / "phasing.csv").string();
+  const json r = Phasing(o, progress);
+  for (const json& take : r["takes"]) {
+    EXPECT_EQ(take["truth"], "matched") << take.dump();
+    // The simulator's label tiers follow the cued keys: they give the rough targets.
+    EXPECT_EQ(take["rough_targets"], "labels") << take.dump();
+  }
+  // CV keys, kinematic estimates minus the truth, measured on these six
+  // sentences (2026-12-02, rough targets from the label tiers): shape onset
+  // -5.0 ms, shape target -0.9 ms, placement target -11.6 ms, placement onset
+  // +46.2 ms (sd 86 ms over 31 keys: the 15 ms bar is NOT met for the
+  // placement onset; docs/analysis-phasing.md says why). Limits just above.
+  const std::map<std::string, double> limit_ms{
+      {"shape onset", 15}, {"shape target", 15}, {"placement target", 20}, {"placement onset", 60}};
+  for (const char* c : {"placement", "shape"})
+    for (const char* l : {"onset", "target"}) {
+      const json& e = r["errors_vs_truth"]["kinematic"]["CV"][c][l];
+      ASSERT_GT(e["count"].get<int>(), 10) << c << " " << l;
+      EXPECT_LT(std::abs(e["mean_ms"].get<double>()), limit_ms.at(std::string(c) + " " + l))
+          << c << " " << l << ": " << e.dump();
+    }
+  // The truth summary is the simulator's laws: CV placement target ~ +37 ms.
+  const json& tv = r["truth"]["CV"]["placement"]["target"];
+  EXPECT_NEAR(tv["mean_ms"].get<double>(), 37.0, 40.0);
+  // One CSV row per measured key, after the header.
+  std::ifstream in(o.csv);
+  std::string line;
+  int64_t lines = 0;
+  while (std::getline(in, line))
+    if (!line.empty()) ++lines;
+  EXPECT_EQ(lines - 1, r["keys_measured"].get<int64_t>());
+  EXPECT_FALSE(PhasingText(r).empty());
+  EXPECT_NE(PhasingText(r).find("CV placement: onset"), std::string::npos);
+}
+
+TEST(PhasingJob, MissingPhoneTierNamesTheTakeAndItsTiers) {
+  Fixture fx;
+  Progress progress;
+  KeysTrainOptions t;
+  t.corpus = fx.corpus;
+  t.takes = {"s0"};
+  t.output = fx.keys;
+  KeysTrain(t, progress);
+  PhasingOptions o;
+  o.corpus = fx.corpus;
+  o.keys = fx.keys;
+  o.phones = "phonemes";
+  try {
+    Phasing(o, progress);
+    FAIL() << "no error";
+  } catch (const InvalidInput& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("take 's0'"), std::string::npos) << m;
+    EXPECT_NE(m.find("no phone tier 'phonemes'"), std::string::npos) << m;
+    EXPECT_NE(m.find("'phones'"), std::string::npos) << m;
+  }
+}
+
+}  // namespace
+}  // namespace csw::jobs

@@ -1,0 +1,218 @@
+#include "workbench/jobs/keys_job.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/error.h"
+#include "core/markerset.h"
+#include "datasets/virtual_cuer.h"
+#include "io/corpus/corpus.h"
+#include "io/models/model_file.h"
+#include "tests/testing/testing.h"
+#include "workbench/jobs/job_util.h"
+
+namespace csw::jobs {
+namespace {
+
+using nlohmann::json;
+
+TEST(KeysOptionsCheck, RequiredOptionsAndReasons) {
+  KeysTrainOptions t;
+  EXPECT_EQ(t.Check(), "no corpus given");
+  t.corpus = "c.h5";
+  EXPECT_EQ(t.Check(), "--takes: name the training takes");
+  t.takes = {"a"};
+  EXPECT_EQ(t.Check(), "-o: no output model file");
+  t.output = "k.h5";
+  EXPECT_EQ(t.Check(), "");
+  t.model.shape.min_variance = 0;
+  EXPECT_EQ(t.Check(), "shape model: min_variance must be > 0");
+  KeysScoreOptions s;
+  s.corpus = "c.h5";
+  EXPECT_EQ(s.Check(), "--keys: no key model file");
+  s.keys = "k.h5";
+  EXPECT_EQ(s.Check(), "");
+  s.decode.min_key_ms = -1;
+  EXPECT_EQ(s.Check(), "min_key_ms must be > 0");
+}
+
+TEST(KeysText, RendersTheScoreReport) {
+  const json r = {
+      {"takes",
+       {{{"take", "s1"},
+         {"frames", 500},
+         {"decoded_keys", 12},
+         {"shape_accuracy", 0.9},
+         {"placement_accuracy", 0.8},
+         {"free_keys_correct", 9},
+         {"aligned_keys_correct", 7},
+         {"keys_expected", 10}}}},
+      {"shape", {{"accuracy", 0.9}, {"count", 10}}},
+      {"placement", {{"accuracy", 0.8}, {"count", 10}}},
+      {"sequence",
+       {{"free",
+         {{"keys_correct", 9}, {"keys_expected", 10}, {"insertions", 2}, {"deletions", 0}, {"substitutions", 1}}},
+        {"aligned",
+         {{"keys_correct", 7}, {"keys_expected", 10}, {"target_error_ms", {{"mean", 31.25}, {"sd", 12.5}}}}}}}};
+  EXPECT_EQ(KeysScoreText(r),
+            "take s1: 500 frames, 12 keys decoded; shape 90.0 %, placement 80.0 %, free 9/10, aligned 7/10\n"
+            "shape accuracy 90.0 % of 10 labelled frames; placement 80.0 % of 10\n"
+            "free decoding: 9 of 10 keys, 2 insertions, 0 deletions, 1 substitutions\n"
+            "aligned decoding: 7 of 10 keys within 40 ms; target error 31.2 ms (sd 12.5)\n");
+}
+
+// Six virtual-cuer sentences (no occlusions, so every feature is observed) in
+// a corpus that remembers the marker set.
+struct Fixture {
+  testing::TempDir dir;
+  std::string corpus, keys;
+  Fixture() {
+    corpus = (dir / "c.h5").string();
+    keys = (dir / "keys.h5").string();
+    SimulateOptions o;
+    o.audio = false;
+    o.occlusions = false;
+    const VirtualCuer cuer(o);
+    const std::string set = MarkerSetToJson(cuer.MakeMarkerSet());
+    const auto texts = ShippedSentences();
+    CorpusTransaction tx(corpus);
+    for (int i = 0; i < 6; ++i) {
+      Take t = cuer.SimulateSentence("s" + std::to_string(i), texts[static_cast<size_t>(i)]).take;
+      t.markerset_json = set;
+      tx.WriteTake(t);
+    }
+    tx.Commit();
+  }
+};
+
+TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
+  Fixture fx;
+  Progress progress;
+  KeysTrainOptions t;
+  t.corpus = fx.corpus;
+  t.takes = {"s[0-3]"};
+  t.output = fx.keys;
+  const json tr = KeysTrain(t, progress);
+  ASSERT_EQ(tr["takes"].size(), 4u);
+  const Take s0 = Corpus::Open(fx.corpus).LoadTake("s0");
+  size_t labels = 0;
+  for (const auto& tier : s0.tiers)
+    if (tier.name == "keys") labels = tier.labels.size();
+  EXPECT_EQ(tr["takes"][0]["shape_targets"].get<size_t>(), labels);
+  EXPECT_EQ(tr["takes"][0]["placement_tier"], "placement_targets");
+  ASSERT_TRUE(LoadModelFile(fx.keys).keys.has_value());
+  EXPECT_EQ(LoadModelFile(fx.keys).keys->info.training_takes.size(), 4u);
+
+  KeysScoreOptions s;
+  s.corpus = fx.corpus;
+  s.keys = fx.keys;
+  s.takes = {"s4,s5"};
+  const json sr = KeysScore(s, progress);
+  ASSERT_EQ(sr["takes"].size(), 2u);
+  const Corpus c = Corpus::Open(fx.corpus);
+  int64_t expected = 0;
+  for (const char* name : {"s4", "s5"}) {
+    const Take take = c.LoadTake(name);
+    std::map<std::string, const LabelTier*> tiers;
+    for (const auto& tier : take.tiers) tiers[tier.name] = &tier;
+    // The simulator's tiers are kept, ours added.
+    for (const char* n : {"words", "phones", "keys", "placement_targets", "keys_decoded", "keys_decoded_targets",
+                          "shape_extents", "placement_extents", "keys_aligned"})
+      EXPECT_EQ(tiers.count(n), 1u) << name << " " << n;
+    expected += static_cast<int64_t>(tiers["keys"]->labels.size());
+    EXPECT_EQ(tiers["keys_aligned"]->labels.size(), tiers["keys"]->labels.size());
+    EXPECT_GT(tiers["keys_decoded"]->labels.size(), 0u);
+  }
+  EXPECT_EQ(sr["shape"]["count"].get<int64_t>(), expected);
+  EXPECT_EQ(sr["sequence"]["free"]["keys_expected"].get<int64_t>(), expected);
+  EXPECT_EQ(sr["sequence"]["aligned"]["keys_expected"].get<int64_t>(), expected);
+  // Accuracy = trace / total of the confusion matrix.
+  int64_t trace = 0, total = 0;
+  const json& conf = sr["shape"]["confusion"];
+  for (size_t i = 0; i < conf.size(); ++i)
+    for (size_t j = 0; j < conf[i].size(); ++j) {
+      total += conf[i][j].get<int64_t>();
+      if (i == j) trace += conf[i][j].get<int64_t>();
+    }
+  EXPECT_EQ(total, expected);
+  EXPECT_DOUBLE_EQ(sr["shape"]["accuracy"].get<double>(), static_cast<double>(trace) / total);
+  // The rest keys (00, first and last of each take) are always recognised.
+  EXPECT_GE(conf[0][0].get<int64_t>(), 4);
+  // Four training sentences, no occlusions: most labelled frames are right.
+  EXPECT_GE(sr["shape"]["accuracy"].get<double>(), 0.6);
+  EXPECT_GE(sr["placement"]["accuracy"].get<double>(), 0.6);
+}
+
+TEST(KeysJob, BadLabelCodesAndMissingKeyModelGiveClearErrors) {
+  Fixture fx;
+  Progress progress;
+  {
+    Take t = Corpus::Open(fx.corpus).LoadTake("s0");
+    for (auto& tier : t.tiers)
+      if (tier.name == "keys") tier.labels[1].text = "9x";
+    CorpusTransaction tx(fx.corpus);
+    tx.WriteTiers("s0", t.tiers);
+    tx.Commit();
+  }
+  KeysTrainOptions t;
+  t.corpus = fx.corpus;
+  t.takes = {"s0"};
+  t.output = fx.keys;
+  try {
+    KeysTrain(t, progress);
+    FAIL() << "bad code accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("take 's0': tier keys: label 2"), std::string::npos) << e.what();
+  }
+  // A model file without /keys.
+  SaveModelFile(fx.keys, ModelFile{});
+  KeysScoreOptions s;
+  s.corpus = fx.corpus;
+  s.keys = fx.keys;
+  try {
+    KeysScore(s, progress);
+    FAIL() << "scored without a key model";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("no key model"), std::string::npos) << e.what();
+  }
+}
+
+TEST(KeysJob, ExplicitLayoutSectionNamesTheMarkers) {
+  Fixture fx;
+  Progress progress;
+  // The layout derived from the roles, written as a hand_layout section without
+  // "head" (the marker set's head cluster is the default).
+  KeysTrainOptions t;
+  t.corpus = fx.corpus;
+  t.takes = {"s0"};
+  t.output = fx.keys;
+  KeysTrain(t, progress);
+  const keys::HandLayout derived = LoadModelFile(fx.keys).keys->layout;
+  json section = keys::HandLayoutToJson(derived);
+  section.erase("head");
+  section["thumb_palm"] = derived.palm[0];  // a different palm point than the derived one
+  const std::string layout_path = (fx.dir / "layout.json").string();
+  std::ofstream(layout_path) << json{{"hand_layout", section}}.dump();
+  t.layout = layout_path;
+  const std::string other = (fx.dir / "keys2.h5").string();
+  t.output = other;
+  KeysTrain(t, progress);
+  const keys::HandLayout explicit_layout = LoadModelFile(other).keys->layout;
+  EXPECT_EQ(explicit_layout.proximal, derived.proximal);
+  EXPECT_EQ(explicit_layout.distal, derived.distal);
+  EXPECT_EQ(explicit_layout.head, derived.head);
+  EXPECT_EQ(explicit_layout.thumb_palm, derived.palm[0]);
+  // A misspelt key is an error naming the file.
+  std::ofstream(layout_path) << R"({"hand_layout": {"fingerz": {}}})";
+  try {
+    KeysTrain(t, progress);
+    FAIL() << "bad layout accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("layout.json: hand_layout: unknown key \"fingerz\""), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace csw::jobs

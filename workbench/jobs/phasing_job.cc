@@ -1,0 +1,429 @@
+#include "workbench/jobs/phasing_job.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include "analysis/keys/hand_features.h"
+#include "analysis/keys/key_decoding.h"
+#include "analysis/keys/key_model.h"
+#include "analysis/phasing/movement_timing.h"
+#include "analysis/phasing/phasing_stats.h"
+#include "analysis/phasing/posterior_landmarks.h"
+#include "core/error.h"
+#include "core/markerset.h"
+#include "io/corpus/corpus.h"
+#include "io/models/model_file.h"
+#include "synth/phasing.h"
+#include "synth/phone_symbols.h"
+#include "workbench/jobs/figures.h"
+#include "workbench/jobs/job_util.h"
+#include "workbench/jobs/take_data.h"
+#include "workbench/jobs/take_selection.h"
+
+namespace csw::jobs {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::string PhasingOptions::Check() const {
+  if (corpus.empty()) return "no corpus given";
+  if (keys.empty()) return "--keys must name a model file with a key model (csw keys train)";
+  PhoneSymbols s;
+  if (!ParsePhoneSymbols(symbols, &s))
+    return "--symbols must be auto, ipa, mfa, xsampa or sppas, not '" + symbols + "'";
+  if (phones.empty()) return "--phones must name the phone tier";
+  if (targets != "auto" && targets != "labels" && targets != "aligned")
+    return "--targets must be auto, labels or aligned, not '" + targets + "'";
+  return "";
+}
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+const LabelTier* FindTier(const std::vector<LabelTier>& tiers, const std::string& name) {
+  for (const LabelTier& t : tiers)
+    if (t.name == name) return &t;
+  return nullptr;
+}
+
+std::string TierNames(const std::vector<LabelTier>& tiers) {
+  std::string s;
+  for (const LabelTier& t : tiers) s += (s.empty() ? "'" : ", '") + t.name + "'";
+  return s.empty() ? "none" : s;
+}
+
+// The true gesture times of a simulated take (<dir>/<take>.truth.json), matched
+// to the cued keys by position when both sequences have the same codes; else
+// nullopt with the reason in *why.
+std::optional<std::vector<KeyTiming>> ReadTruth(const std::string& dir, const std::string& take,
+                                                const std::vector<Key>& keys, std::string* why) {
+  const fs::path path = fs::path(dir) / (take + ".truth.json");
+  std::ifstream in(path);
+  if (!in) {
+    *why = path.string() + ": not found";
+    return std::nullopt;
+  }
+  json j;
+  try {
+    in >> j;
+  } catch (const json::exception& e) {
+    throw ParseError(Location{path.string(), std::nullopt, std::nullopt}, std::string("not JSON: ") + e.what());
+  }
+  if (!j.contains("keys") || !j["keys"].is_array())
+    throw ParseError(Location{path.string(), std::nullopt, std::nullopt}, "no \"keys\" array");
+  const json& tk = j["keys"];
+  if (tk.size() != keys.size()) {
+    *why =
+        path.string() + ": " + std::to_string(tk.size()) + " keys, the phone tier cues " + std::to_string(keys.size());
+    return std::nullopt;
+  }
+  std::vector<KeyTiming> out(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i) {
+    const json& k = tk[i];
+    if (k.value("code", std::string()) != keys[i].Code()) {
+      *why = path.string() + ": key " + std::to_string(i) + " is " + k.value("code", std::string("?")) +
+             ", the phone tier cues " + keys[i].Code();
+      return std::nullopt;
+    }
+    try {
+      out[i].placement_start_s = k.at("placement_start_s").get<double>();
+      out[i].placement_target_s = k.at("placement_target_s").get<double>();
+      out[i].shape_start_s = k.at("shape_start_s").get<double>();
+      out[i].shape_target_s = k.at("shape_target_s").get<double>();
+    } catch (const json::exception& e) {
+      throw ParseError(Location{path.string(), std::nullopt, std::nullopt},
+                       "key " + std::to_string(i) + ": " + e.what());
+    }
+  }
+  return out;
+}
+
+double Time(int64_t frame, double rate) { return static_cast<double>(frame) / rate; }
+
+// Rough target frames from a point tier of key codes whose sequence is the cued
+// keys' (all of them, or all but the leading rest): label i -> key i (+1).
+// Returns false (and leaves `frames` alone) when the sequences differ.
+bool TargetsFromLabels(const LabelTier* tier, const std::vector<Key>& keys, double rate, std::vector<int64_t>* frames) {
+  if (tier == nullptr || tier->labels.empty()) return false;
+  std::vector<std::string> codes;
+  for (const Key& k : keys) codes.push_back(k.Code());
+  for (size_t offset : {size_t{0}, size_t{1}}) {
+    if (tier->labels.size() + offset != codes.size()) continue;
+    bool same = true;
+    for (size_t i = 0; i < tier->labels.size() && same; ++i) same = tier->labels[i].text == codes[i + offset];
+    if (!same) continue;
+    for (size_t i = 0; i < tier->labels.size(); ++i)
+      (*frames)[i + offset] =
+          static_cast<int64_t>(std::llround(0.5 * (tier->labels[i].start_s + tier->labels[i].end_s) * rate));
+    return true;
+  }
+  return false;
+}
+
+// Mean and sd (ms) of estimate − truth over the rows of one type, component and landmark.
+json ErrorSummary(const std::vector<phasing::PhasingKeyRow>& rows, phasing::PhasingMethod method) {
+  json out;
+  for (KeyType type : {KeyType::kCV, KeyType::kVowelAlone, KeyType::kConsonantAlone}) {
+    json tj;
+    for (int c = 0; c < 2; ++c)
+      for (int l = 0; l < 2; ++l) {
+        std::vector<double> e;
+        for (const auto& r : rows) {
+          if (r.type != type) continue;
+          const KeyTiming& m = method == phasing::PhasingMethod::kKinematic ? r.kinematic : r.posterior;
+          const double est = c == 0 ? (l == 0 ? m.placement_start_s : m.placement_target_s)
+                                    : (l == 0 ? m.shape_start_s : m.shape_target_s);
+          const double tru = c == 0 ? (l == 0 ? r.truth.placement_start_s : r.truth.placement_target_s)
+                                    : (l == 0 ? r.truth.shape_start_s : r.truth.shape_target_s);
+          if (std::isfinite(est) && std::isfinite(tru)) e.push_back(1000 * (est - tru));
+        }
+        const phasing::TimeSummary s = phasing::SummariseTimes(e);
+        tj[c == 0 ? "placement" : "shape"][l == 0 ? "onset" : "target"] = {
+            {"mean_ms", s.mean_ms}, {"sd_ms", s.sd_ms}, {"ci95_ms", s.ci95_ms}, {"count", s.count}};
+      }
+    out[phasing::KeyTypeLabel(type)] = tj;
+  }
+  return out;
+}
+
+}  // namespace
+
+json Phasing(const PhasingOptions& options, Progress& progress) {
+  if (const std::string why = options.Check(); !why.empty()) throw UsageError(why);
+  PhoneSymbols symbols = PhoneSymbols::kAuto;
+  ParsePhoneSymbols(options.symbols, &symbols);
+  const ModelFile mf = LoadModelFile(options.keys);
+  if (!mf.keys) throw InvalidInput(options.keys + ": no key model (/keys) in this model file (csw keys train)");
+  const keys::KeyModel& model = *mf.keys;
+  const PhasingModel reference = options.reference.empty() ? PhasingModel{} : LoadPhasingModel(options.reference);
+  std::optional<MarkerSet> given;
+  if (!options.markerset.empty()) given = LoadMarkerSet(options.markerset);
+  if (!options.figures.empty()) {
+    figures::Require();
+    fs::create_directories(options.figures);
+  }
+
+  const Corpus corpus = Corpus::Open(options.corpus);
+  const std::vector<TakeRange> ranges = SelectCorpusTakes(corpus, options.takes);
+  json result = {{"corpus", options.corpus}, {"keys", options.keys}, {"takes", json::array()}};
+  std::vector<phasing::PhasingKeyRow> rows;
+  json figure_files = json::array();
+  bool any_truth = false;
+  phasing::MovementFitOptions placement_fit, shape_fit;
+  shape_fit.path_terms = 3;  // distances are nonlinear in the joint angles: curved paths (docs/analysis-phasing.md)
+  for (size_t i = 0; i < ranges.size(); ++i) {
+    const TakeRange& range = ranges[i];
+    progress.Update("phasing: " + range.take, static_cast<double>(i) / static_cast<double>(ranges.size()));
+    progress.CheckCancel();
+    const std::string where = corpus.path() + ": take '" + range.take + "'";
+    const Take take = corpus.LoadTake(range.take);
+    if (range.first != 0 || range.count != take.frames())
+      throw UsageError("csw phasing works on whole takes: '" + range.spec + "' selects frames of take '" + range.take +
+                       "'");
+    if (!(take.rate_hz > 0)) throw InvalidInput(where + ": no frame rate");
+    const double rate = take.rate_hz;
+    const LabelTier* phone_tier = FindTier(take.tiers, options.phones);
+    if (phone_tier == nullptr)
+      throw InvalidInput(where + ": no phone tier '" + options.phones + "' (tiers: " + TierNames(take.tiers) +
+                         "); name it with --phones");
+    const CuedTier cued = CuePhoneTier(*phone_tier, symbols, where + ": tier '" + options.phones + "'");
+    const std::vector<Key>& cue_keys = cued.keys;
+
+    std::optional<MarkerSet> set = given;
+    if (!set) {
+      const std::string text = corpus.TakeMarkerSet(range.take);
+      if (!text.empty()) set = ParseMarkerSet(text, where + " (its marker set)");
+    }
+    MarkerBinding binding;
+    if (set) {
+      binding = BindMarkerSet(*set, take.marker_names, false, where);
+    } else {
+      for (size_t m = 0; m < take.marker_names.size(); ++m) binding.index[take.marker_names[m]] = static_cast<int>(m);
+    }
+    const keys::HandFeatures features =
+        keys::ComputeHandFeatures(take.markers, binding, model.layout, model.head_reference);
+    const keys::KeyPosteriors post = keys::ScoreFrames(model, features);
+    std::vector<keys::ExpectedKey> expected;
+    for (const Key& k : cue_keys) expected.push_back({k.placement, k.shape});
+    const std::vector<keys::DecodedKey> aligned = keys::DecodeAligned(post, expected, rate);
+    if (aligned.size() != cue_keys.size())
+      throw InvalidInput(where + ": the aligned decoding gave " + std::to_string(aligned.size()) + " keys for " +
+                         std::to_string(cue_keys.size()) + " expected");
+
+    // Rough target times: the take's labelled targets when their codes follow
+    // the cued keys (csw keys train's label tiers), else the aligned decoding's.
+    std::vector<int64_t> shape_frames, placement_frames;
+    for (const auto& a : aligned) {
+      shape_frames.push_back(a.shape_target_frame);
+      placement_frames.push_back(a.placement_target_frame);
+    }
+    std::string targets = "aligned decoding";
+    if (options.targets != "aligned") {
+      const bool shape_ok = TargetsFromLabels(FindTier(take.tiers, options.labels), cue_keys, rate, &shape_frames);
+      const LabelTier* pt = FindTier(take.tiers, options.label_placement);
+      const bool placement_ok = TargetsFromLabels(pt != nullptr ? pt : FindTier(take.tiers, options.labels), cue_keys,
+                                                  rate, &placement_frames);
+      if (shape_ok && placement_ok)
+        targets = "labels";
+      else if (shape_ok || placement_ok)
+        targets = "labels (one component) and aligned decoding";
+      else if (options.targets == "labels")
+        throw InvalidInput(where + ": the label tiers '" + options.labels + "' / '" + options.label_placement +
+                           "' do not follow the cued keys; use --targets aligned");
+    }
+
+    std::string truth_why;
+    std::optional<std::vector<KeyTiming>> truth;
+    if (!options.truth.empty()) truth = ReadTruth(options.truth, range.take, cue_keys, &truth_why);
+    any_truth = any_truth || truth.has_value();
+
+    const phasing::SampledTrajectory shape_traj{&features.distances, rate, 0.0};
+    const phasing::SampledTrajectory index_traj{&features.index_tip, rate, 0.0};
+    const phasing::SampledTrajectory middle_traj{&features.middle_tip, rate, 0.0};
+    int measured = 0;
+    for (size_t k = 1; k < cue_keys.size(); ++k) {
+      const Key& key = cue_keys[k];
+      if (key.type == KeyType::kRest) continue;
+      phasing::PhasingKeyRow row;
+      row.take = range.take;
+      row.key_index = static_cast<int>(k);
+      row.code = key.Code();
+      row.type = key.type;
+      row.a1_s = key.a1_s;
+      row.vowel_onset_s = phasing::VowelOnset(key, cued.mapped.phones);
+      if (truth) row.truth = (*truth)[k];
+      const size_t kn = k + 1 < cue_keys.size() ? k + 1 : k;
+      const double end_s = take.duration_s();
+      auto next_time = [&](int64_t frame, double cur_s) {
+        const double t = Time(frame, rate);
+        return t > cur_s + 1e-6 ? t : std::min(end_s, cur_s + 0.3);
+      };
+      // Placement: the tip of the key's longest extended finger.
+      if (cue_keys[k - 1].placement != key.placement) {
+        const bool index = model.IndexFinger(key.shape);
+        const double p0 = Time(placement_frames[k - 1], rate), p1 = Time(placement_frames[k], rate);
+        const double p2 = next_time(placement_frames[kn], p1);
+        if (p0 < p1 && p1 < p2) {
+          const phasing::MovementEstimate m =
+              phasing::EstimateMovement(index ? index_traj : middle_traj, p0, p1, p2, placement_fit);
+          if (m.moved) {
+            row.kinematic.placement_start_s = m.onset_s;
+            row.kinematic.placement_target_s = m.target_s;
+          }
+        }
+        const phasing::PosteriorLandmarks pl =
+            phasing::FindPosteriorLandmarks(post.placement, rate, 0.0, key.placement, p0, p2);
+        if (pl.found) {
+          row.posterior.placement_start_s = pl.onset_s;
+          row.posterior.placement_target_s = pl.target_s;
+        }
+      } else {
+        row.truth.placement_start_s = row.truth.placement_target_s = kNaN;
+      }
+      if (cue_keys[k - 1].shape != key.shape) {
+        const double s0 = Time(shape_frames[k - 1], rate), s1 = Time(shape_frames[k], rate);
+        const double s2 = next_time(shape_frames[kn], s1);
+        if (s0 < s1 && s1 < s2) {
+          const phasing::MovementEstimate m = phasing::EstimateMovement(shape_traj, s0, s1, s2, shape_fit);
+          if (m.moved) {
+            row.kinematic.shape_start_s = m.onset_s;
+            row.kinematic.shape_target_s = m.target_s;
+          }
+        }
+        const phasing::PosteriorLandmarks pl =
+            phasing::FindPosteriorLandmarks(post.shape, rate, 0.0, key.shape, s0, s2);
+        if (pl.found) {
+          row.posterior.shape_start_s = pl.onset_s;
+          row.posterior.shape_target_s = pl.target_s;
+        }
+      } else {
+        row.truth.shape_start_s = row.truth.shape_target_s = kNaN;
+      }
+      ++measured;
+      rows.push_back(row);
+    }
+    json tj = {
+        {"take", range.spec}, {"keys", measured}, {"rough_targets", targets}, {"phone_warnings", cued.mapped.warnings}};
+    if (!options.truth.empty()) tj["truth"] = truth ? "matched" : truth_why;
+    result["takes"].push_back(tj);
+
+    if (!options.figures.empty()) {
+      std::vector<LabelTier> tiers{*phone_tier, cued.tier};
+      std::vector<float> audio;
+      if (!take.audio.samples.empty()) {
+        audio.resize(static_cast<size_t>(take.audio.frames()));
+        for (size_t s = 0; s < audio.size(); ++s)
+          audio[s] = take.audio.samples[s * static_cast<size_t>(take.audio.channels)];
+      }
+      report::PosteriorLane shape_lane{"hand shape", {}, post.shape};
+      for (int c = 0; c < post.shape.cols(); ++c) shape_lane.classes.push_back(std::to_string(c));
+      report::PosteriorLane placement_lane{"hand placement", {}, post.placement};
+      for (int c = 0; c < post.placement.cols(); ++c) placement_lane.classes.push_back(std::to_string(c));
+      const std::string path = (fs::path(options.figures) / ("gestural_score_" + range.take + ".png")).string();
+      figures::SaveGesturalScore(path, "Gestural score: " + range.take, audio, take.audio.rate_hz, 0.0,
+                                 {shape_lane, placement_lane}, rate, tiers, 0.0, take.duration_s());
+      figure_files.push_back(path);
+    }
+  }
+
+  using phasing::PhasingMethod;
+  using phasing::PhasingReference;
+  result["kinematic"] =
+      phasing::PhasingSummaryToJson(phasing::SummarisePhasing(rows, PhasingMethod::kKinematic, PhasingReference::kA1));
+  result["posterior"] =
+      phasing::PhasingSummaryToJson(phasing::SummarisePhasing(rows, PhasingMethod::kPosterior, PhasingReference::kA1));
+  result["relative_to_vowel_onset"] = {
+      {"kinematic", phasing::PhasingSummaryToJson(
+                        phasing::SummarisePhasing(rows, PhasingMethod::kKinematic, PhasingReference::kVowelOnset))},
+      {"posterior", phasing::PhasingSummaryToJson(
+                        phasing::SummarisePhasing(rows, PhasingMethod::kPosterior, PhasingReference::kVowelOnset))}};
+  if (any_truth) {
+    result["truth"] =
+        phasing::PhasingSummaryToJson(phasing::SummarisePhasing(rows, PhasingMethod::kTruth, PhasingReference::kA1));
+    result["errors_vs_truth"] = {{"kinematic", ErrorSummary(rows, PhasingMethod::kKinematic)},
+                                 {"posterior", ErrorSummary(rows, PhasingMethod::kPosterior)}};
+  }
+  if (!options.csv.empty()) {
+    std::string text = phasing::PhasingCsvHeader() + "\n";
+    for (const auto& r : rows) text += phasing::PhasingCsvRow(r) + "\n";
+    std::ofstream out(options.csv);
+    if (!out) throw IoError(options.csv, "cannot open for writing");
+    out << text;
+    out.close();
+    if (!out) throw IoError(options.csv, "write failed");
+    result["csv"] = options.csv;
+  }
+  if (!options.figures.empty()) {
+    for (PhasingMethod method : {PhasingMethod::kKinematic, PhasingMethod::kPosterior}) {
+      std::vector<report::HistogramPanel> panels;
+      for (KeyType type : {KeyType::kCV, KeyType::kVowelAlone, KeyType::kConsonantAlone})
+        for (phasing::Component c : {phasing::Component::kPlacement, phasing::Component::kShape})
+          for (phasing::Landmark l : {phasing::Landmark::kOnset, phasing::Landmark::kTarget}) {
+            report::HistogramPanel p;
+            const bool placement = c == phasing::Component::kPlacement, onset = l == phasing::Landmark::kOnset;
+            p.title = std::string(phasing::KeyTypeLabel(type)) + (placement ? " placement " : " shape ") +
+                      (onset ? "onset" : "target");
+            p.values_ms = phasing::RelativeTimesMs(rows, method, PhasingReference::kA1, type, c, l);
+            const MovementTiming& law = placement ? PlacementTiming(reference, type) : ShapeTiming(reference, type);
+            p.reference_ms = 1000 * (onset ? law.start_mean_s : law.target_mean_s);
+            p.reference_name = options.reference.empty() ? "Attina 2005 (mean)" : "reference model (mean)";
+            panels.push_back(std::move(p));
+          }
+      const bool kin = method == PhasingMethod::kKinematic;
+      const std::string path =
+          (fs::path(options.figures) / (kin ? "phasing_kinematic.png" : "phasing_posterior.png")).string();
+      figures::SaveHistograms(path,
+                              kin ? "Phasing, kinematic landmarks (minimum-jerk fit)"
+                                  : "Phasing, posterior landmarks (dominance onset, peak)",
+                              panels, 20.0, "time from A1 (ms)");
+      figure_files.push_back(path);
+    }
+    result["figures"] = figure_files;
+  }
+  result["keys_measured"] = rows.size();
+  return result;
+}
+
+std::string PhasingText(const json& r) {
+  std::ostringstream o;
+  o << "phasing of " << r["keys_measured"].get<int64_t>() << " keys in " << r["takes"].size()
+    << " takes (ms from A1: mean ± sd [95 % CI half-width], n)\n";
+  auto line = [&](const json& s) {
+    std::ostringstream l;
+    if (s["count"].get<int>() == 0) return std::string("-");
+    l.setf(std::ios::fixed);
+    l.precision(1);
+    l << s["mean_ms"].get<double>() << " ± " << s["sd_ms"].get<double>() << " [" << s["ci95_ms"].get<double>()
+      << "] n=" << s["count"].get<int>();
+    return l.str();
+  };
+  for (const char* method : {"kinematic", "posterior", "truth"}) {
+    if (!r.contains(method)) continue;
+    o << method << ":\n";
+    for (const char* type : {"CV", "V", "C"})
+      for (const char* c : {"placement", "shape"}) {
+        const json& s = r[method][type][c];
+        o << "  " << type << " " << c << ": onset " << line(s["onset"]) << "; target " << line(s["target"]) << "\n";
+      }
+  }
+  if (r.contains("errors_vs_truth")) {
+    o << "estimate - truth:\n";
+    for (const char* method : {"kinematic", "posterior"})
+      for (const char* type : {"CV", "V", "C"})
+        for (const char* c : {"placement", "shape"}) {
+          const json& s = r["errors_vs_truth"][method][type][c];
+          o << "  " << method << " " << type << " " << c << ": onset " << line(s["onset"]) << "; target "
+            << line(s["target"]) << "\n";
+        }
+  }
+  if (r.contains("csv")) o << "per-key CSV: " << r["csv"].get<std::string>() << "\n";
+  if (r.contains("figures"))
+    for (const json& f : r["figures"]) o << "figure: " << f.get<std::string>() << "\n";
+  return o.str();
+}
+
+}  // namespace csw::jobs
