@@ -61,7 +61,11 @@ std::string TierNames(const std::vector<LabelTier>& tiers) {
 // nullopt with the reason in *why.
 std::optional<std::vector<KeyTiming>> ReadTruth(const std::string& dir, const std::string& take,
                                                 const std::vector<Key>& keys, std::string* why) {
-  const fs::path path = fs::path(dir) / (take + ".truth.json");
+  // A take version made by csw clean or csw invert --fill ("<take>.filled")
+  // shares the truth of the take it was made from.
+  fs::path path = fs::path(dir) / (take + ".truth.json");
+  if (const size_t dot = take.find(".filled"); !fs::exists(path) && dot != std::string::npos)
+    path = fs::path(dir) / (take.substr(0, dot) + ".truth.json");
   std::ifstream in(path);
   if (!in) {
     *why = path.string() + ": not found";

@@ -97,6 +97,7 @@ void SaveGesturalScore(const std::string& path, const std::string& title, const 
   const int height =
       110 + wave_px + tier_px * static_cast<int>(tiers.size()) + lane_px * static_cast<int>(lanes.size());
   Canvas plot(kFigureWidth, height);
+  plot.setAutoAddPlottableToLegend(false);  // each lane has its own legend
   plot.plotLayout()->clear();
   auto* margins = new QCPMarginGroup(&plot);
   std::vector<QCPAxisRect*> rects;
@@ -143,11 +144,15 @@ void SaveGesturalScore(const std::string& path, const std::string& title, const 
     stretch.push_back(tier_px);
     QCPAxis* y = rect->axis(QCPAxis::atLeft);
     y->setRange(0, 1);
-    y->setTicks(false);
-    y->setTickLabels(false);
+    // The tier's name written across, left of the lane (a rotated axis label
+    // would not fit a lane this low).
+    auto name = QSharedPointer<QCPAxisTickerText>::create();
+    name->addTick(0.5, Q(tier.name));
+    y->setTicker(name);
+    y->setTickLength(0, 0);
+    y->setSubTicks(false);
+    y->setTickLabelFont(Font(8));
     y->grid()->setVisible(false);
-    y->setLabel(Q(tier.name));
-    y->setLabelFont(Font(9));
     rect->axis(QCPAxis::atBottom)->grid()->setVisible(false);
     const QPen boundary(QColor(40, 90, 160), 1.2);
     for (const Label& l : tier.labels) {
