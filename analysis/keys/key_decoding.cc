@@ -80,6 +80,54 @@ void SetTargets(const KeyPosteriors& post, const Emissions& e, double plateau, d
       TargetFrame(k->start_frame, k->end_frame, plateau, [&](int64_t t) { return e.log_placement(t, p); });
 }
 
+// Splits frames [0, n) into m contiguous segments, in order, each at least
+// min_len frames (clipped to n / m), maximising the sum of emission(t, j) over
+// the frames t of segment j (dynamic programming, O(m × n)). Returns the start
+// frame of every segment.
+std::vector<int64_t> AlignSegments(int64_t n, int64_t m, int64_t min_len,
+                                   const std::function<double(int64_t, int64_t)>& emission) {
+  const int64_t lmin = std::max<int64_t>(1, std::min<int64_t>(min_len, n / m));
+  // prev[t]: best score with segments 0..j-1 covering [0, t], segment j-1 ending at t.
+  std::vector<double> prev(static_cast<size_t>(n), kNegInf), cur(static_cast<size_t>(n), kNegInf);
+  std::vector<int32_t> start(static_cast<size_t>(m * n), -1);  // start of segment j when it ends at t
+  std::vector<double> cum(static_cast<size_t>(n + 1));
+  for (int64_t j = 0; j < m; ++j) {
+    cum[0] = 0;
+    for (int64_t t = 0; t < n; ++t) cum[t + 1] = cum[t] + emission(t, j);
+    std::fill(cur.begin(), cur.end(), kNegInf);
+    if (j == 0) {
+      for (int64_t t = lmin - 1; t < n; ++t) {
+        cur[t] = cum[t + 1];
+        start[static_cast<size_t>(t)] = 0;
+      }
+    } else {
+      // cur[t] = cum[t+1] + max_{u <= t - lmin} (prev[u] - cum[u+1]); segment starts at u + 1.
+      double run = kNegInf;
+      int64_t arg = -1;
+      for (int64_t t = 0; t < n; ++t) {
+        const int64_t u = t - lmin;
+        if (u >= 0 && prev[u] > kNegInf && prev[u] - cum[u + 1] > run) {
+          run = prev[u] - cum[u + 1];
+          arg = u;
+        }
+        if (arg >= 0) {
+          cur[t] = cum[t + 1] + run;
+          start[static_cast<size_t>(j * n + t)] = static_cast<int32_t>(arg + 1);
+        }
+      }
+    }
+    prev.swap(cur);
+  }
+  if (!(prev[n - 1] > kNegInf)) throw InvalidInput("aligned decoding: no alignment (take too short)");
+  std::vector<int64_t> starts(static_cast<size_t>(m));
+  int64_t end = n;
+  for (int64_t j = m - 1; j >= 0; --j) {
+    starts[j] = start[static_cast<size_t>(j * n + end - 1)];
+    end = starts[j];
+  }
+  return starts;
+}
+
 }  // namespace
 
 std::string DecodeOptions::Check() const {
@@ -195,52 +243,45 @@ std::vector<DecodedKey> DecodeAligned(const KeyPosteriors& posteriors, const std
   const int64_t n = posteriors.frames();
   const auto m = static_cast<int64_t>(expected.size());
   if (n < m) throw InvalidInput("aligned decoding: fewer frames than expected keys");
-  const int64_t lmin = std::max<int64_t>(1, std::min<int64_t>(Frames(options.aligned_min_key_ms, rate_hz), n / m));
-  // f[t] for the current key: best score with keys 0..j covering frames [0, t], key j ending at t.
-  std::vector<double> prev(static_cast<size_t>(n), kNegInf), cur(static_cast<size_t>(n), kNegInf);
-  std::vector<int32_t> start(static_cast<size_t>(m * n), -1);  // start frame of key j's segment ending at t
-  std::vector<double> cum(static_cast<size_t>(n + 1));
-  for (int64_t j = 0; j < m; ++j) {
-    const int p = expected[j].placement, s = expected[j].shape;
-    cum[0] = 0;
-    for (int64_t t = 0; t < n; ++t) cum[t + 1] = cum[t] + e.Key(t, p, s);
-    std::fill(cur.begin(), cur.end(), kNegInf);
-    if (j == 0) {
-      for (int64_t t = lmin - 1; t < n; ++t) {
-        cur[t] = cum[t + 1];
-        start[static_cast<size_t>(t)] = 0;
-      }
-    } else {
-      // cur[t] = cum[t+1] + max_{u <= t - lmin} (prev[u] - cum[u+1]); segment starts at u + 1.
-      double run = kNegInf;
-      int64_t arg = -1;
-      for (int64_t t = 0; t < n; ++t) {
-        const int64_t u = t - lmin;
-        if (u >= 0 && prev[u] > kNegInf && prev[u] - cum[u + 1] > run) {
-          run = prev[u] - cum[u + 1];
-          arg = u;
-        }
-        if (arg >= 0) {
-          cur[t] = cum[t + 1] + run;
-          start[static_cast<size_t>(j * n + t)] = static_cast<int32_t>(arg + 1);
-        }
-      }
-    }
-    prev.swap(cur);
-  }
-  if (!(prev[n - 1] > kNegInf)) throw InvalidInput("aligned decoding: no alignment (take too short)");
+  const std::vector<int64_t> starts =
+      AlignSegments(n, m, Frames(options.aligned_min_key_ms, rate_hz),
+                    [&](int64_t t, int64_t j) { return e.Key(t, expected[j].placement, expected[j].shape); });
   std::vector<DecodedKey> keys(static_cast<size_t>(m));
-  int64_t end = n;
-  for (int64_t j = m - 1; j >= 0; --j) {
-    const int64_t st = start[static_cast<size_t>(j * n + end - 1)];
+  for (int64_t j = 0; j < m; ++j) {
     keys[j].placement = expected[j].placement;
     keys[j].shape = expected[j].shape;
-    keys[j].start_frame = st;
-    keys[j].end_frame = end;
-    end = st;
+    keys[j].start_frame = starts[j];
+    keys[j].end_frame = j + 1 < m ? starts[j + 1] : n;
   }
   for (auto& key : keys) SetTargets(posteriors, e, options.plateau_log, options.arrival_tolerance, &key);
   return keys;
+}
+
+std::vector<ComponentSegment> AlignComponent(const Eigen::MatrixXd& posteriors, const std::vector<int>& labels,
+                                             double rate_hz, const DecodeOptions& options,
+                                             const std::vector<std::pair<int64_t, int64_t>>& windows) {
+  const std::string reason = options.Check();
+  if (!reason.empty()) throw InvalidInput("key decoding: " + reason);
+  if (labels.empty()) throw InvalidInput("aligned decoding: the expected label sequence is empty");
+  for (int x : labels)
+    if (x < 0 || x >= posteriors.cols())
+      throw InvalidInput("aligned decoding: label " + std::to_string(x) + " out of range");
+  const int64_t n = posteriors.rows();
+  const auto m = static_cast<int64_t>(labels.size());
+  if (n < m) throw InvalidInput("aligned decoding: fewer frames than expected labels");
+  if (!windows.empty() && windows.size() != labels.size())
+    throw InvalidInput("aligned decoding: " + std::to_string(windows.size()) + " windows for " +
+                       std::to_string(labels.size()) + " labels");
+  const Eigen::MatrixXd log_post = posteriors.array().max(options.floor).log().matrix();
+  const double outside = std::log(options.floor) - 1.0;  // below any frame inside
+  const std::vector<int64_t> starts =
+      AlignSegments(n, m, Frames(options.aligned_min_key_ms, rate_hz), [&](int64_t t, int64_t j) {
+        if (!windows.empty() && (t < windows[j].first || t >= windows[j].second)) return outside;
+        return log_post(t, labels[j]);
+      });
+  std::vector<ComponentSegment> out(static_cast<size_t>(m));
+  for (int64_t j = 0; j < m; ++j) out[j] = {labels[j], starts[j], j + 1 < m ? starts[j + 1] : n};
+  return out;
 }
 
 std::vector<GestureExtent> GestureExtents(const Eigen::MatrixXd& posteriors) {

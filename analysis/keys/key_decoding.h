@@ -28,6 +28,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "analysis/keys/key_model.h"
@@ -66,6 +67,25 @@ struct ExpectedKey {
 // sequence is empty or a key is out of range.
 std::vector<DecodedKey> DecodeAligned(const KeyPosteriors& posteriors, const std::vector<ExpectedKey>& expected,
                                       double rate_hz, const DecodeOptions& options = {});
+
+// Aligned decoding of one component (shape or placement posteriors, frames ×
+// classes) against its own label sequence: one contiguous segment per label,
+// in order, each at least aligned_min_key_ms long, maximising the summed log
+// posterior. Give successive labels that differ (a component that does not
+// change between keys has no segment of its own). Optional windows, one
+// [first, last) frame range per label: frames of a label's segment outside its
+// window count as if its posterior were below the floor (log floor − 1: a
+// soft constraint, e.g. near the joint decoding's segments). Throws InvalidInput when the sequence is
+// empty, a label is out of range, the windows do not match the labels or the
+// take is too short.
+struct ComponentSegment {
+  int label = 0;
+  int64_t start_frame = 0;  // [start, end)
+  int64_t end_frame = 0;
+};
+std::vector<ComponentSegment> AlignComponent(const Eigen::MatrixXd& posteriors, const std::vector<int>& labels,
+                                             double rate_hz, const DecodeOptions& options = {},
+                                             const std::vector<std::pair<int64_t, int64_t>>& windows = {});
 
 // Gesture extent: a maximal run of frames where one class has the highest
 // posterior (it dominates the competing classes).

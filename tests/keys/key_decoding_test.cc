@@ -105,6 +105,32 @@ TEST(DecodeAligned, PlacesTheExpectedSequenceOnThePosteriors) {
   EXPECT_THROW(DecodeAligned(p, {{7, 0}}, 100.0), InvalidInput);
 }
 
+TEST(AlignComponent, OneSegmentPerLabelAndWindowsPullSegmentsToTheirRange) {
+  // Shape runs 0 (30 frames), 5 (40), 1 (25), 0 (30): the shape labels align
+  // to their runs exactly.
+  const auto p = Script({{"00", 30}, {"25", 40}, {"31", 25}, {"00", 30}});
+  const auto s = AlignComponent(p.shape, {0, 5, 1, 0}, 100.0);
+  ASSERT_EQ(s.size(), 4u);
+  EXPECT_EQ(s[1].label, 5);
+  EXPECT_EQ(s[1].start_frame, 30);
+  EXPECT_EQ(s[2].start_frame, 70);
+  EXPECT_EQ(s[3].start_frame, 95);
+  EXPECT_EQ(s[3].end_frame, 125);
+  // Shape 5 shows twice (20 frames, then 15): aligned as 0 5 0, label 5 takes
+  // the longer run; a window around the second run moves it there.
+  const auto q = Script({{"00", 30}, {"25", 20}, {"00", 20}, {"25", 15}, {"00", 30}});
+  const auto longer = AlignComponent(q.shape, {0, 5, 0}, 100.0);
+  EXPECT_EQ(longer[1].start_frame, 30);
+  EXPECT_EQ(longer[1].end_frame, 50);
+  const std::vector<std::pair<int64_t, int64_t>> windows = {{0, 115}, {60, 100}, {0, 115}};
+  const auto held = AlignComponent(q.shape, {0, 5, 0}, 100.0, {}, windows);
+  EXPECT_EQ(held[1].start_frame, 70);
+  EXPECT_EQ(held[1].end_frame, 85);
+  EXPECT_THROW(AlignComponent(p.shape, {}, 100.0), InvalidInput);
+  EXPECT_THROW(AlignComponent(p.shape, {9}, 100.0), InvalidInput);
+  EXPECT_THROW(AlignComponent(p.shape, {0, 5}, 100.0, {}, windows), InvalidInput);  // 3 windows, 2 labels
+}
+
 TEST(GestureExtents, RunsOfTheDominantClassAndKeysWithUnchangedComponentsExcluded) {
   const auto p = Script({{"00", 10}, {"25", 10}, {"35", 10}, {"00", 10}});
   const auto shape = GestureExtents(p.shape);

@@ -118,10 +118,14 @@ TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
     for (const auto& tier : take.tiers) tiers[tier.name] = &tier;
     // The simulator's tiers are kept, ours added.
     for (const char* n : {"words", "phones", "keys", "placement_targets", "keys_decoded", "keys_decoded_targets",
-                          "shape_extents", "placement_extents", "keys_aligned"})
+                          "shape_extents", "placement_extents", "keys_aligned", "placement_aligned"})
       EXPECT_EQ(tiers.count(n), 1u) << name << " " << n;
     expected += static_cast<int64_t>(tiers["keys"]->labels.size());
     EXPECT_EQ(tiers["keys_aligned"]->labels.size(), tiers["keys"]->labels.size());
+    // One placement target per placement change: at most one per key, and at
+    // most as many as the placement_targets tier's marks.
+    EXPECT_GT(tiers["placement_aligned"]->labels.size(), 0u);
+    EXPECT_LE(tiers["placement_aligned"]->labels.size(), tiers["placement_targets"]->labels.size());
     EXPECT_GT(tiers["keys_decoded"]->labels.size(), 0u);
   }
   EXPECT_EQ(sr["shape"]["count"].get<int64_t>(), expected);

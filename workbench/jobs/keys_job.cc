@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "analysis/keys/hand_features.h"
+#include "analysis/keys/key_timing.h"
 #include "core/error.h"
 #include "core/file_util.h"
 #include "core/json_util.h"
@@ -301,17 +302,23 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
       free_ins += a.insertions;
       free_del += a.deletions;
       free_sub += a.substitutions;
-      const std::vector<DecodedKey> aligned = DecodeAligned(post, expected_keys, rate, options.decode);
+      // Aligned decoding with kinematic target times (analysis/keys/key_timing.h).
+      KeyTimingOptions timing;
+      timing.decode = options.decode;
+      const std::vector<TimedKey> aligned = DecodeAlignedTimed(model, features, post, expected_keys, rate, timing);
       LabelTier aligned_tier = PointTier("keys_aligned", end_s);
+      LabelTier aligned_places = PointTier("placement_aligned", end_s);
       int take_correct = 0;
       for (size_t k = 0; k < aligned.size(); ++k) {
-        const double err =
-            1000.0 * std::abs(static_cast<double>(aligned[k].target_frame - labels.shape_frames[k])) / rate;
+        const double err = 1000.0 * std::abs(aligned[k].target_s - labels.shape_frames[k] / rate);
         errors_ms.push_back(err);
         if (err <= 40.0) ++take_correct;
-        aligned_tier.labels.push_back(
-            {aligned[k].target_frame / rate, aligned[k].target_frame / rate, aligned[k].Code()});
+        const std::string code = aligned[k].key.Code();
+        aligned_tier.labels.push_back({aligned[k].target_s, aligned[k].target_s, code});
+        if (aligned[k].placement.changes)
+          aligned_places.labels.push_back({aligned[k].placement.target_s, aligned[k].placement.target_s, code});
       }
+      new_tiers.push_back(aligned_places);
       aligned_correct += take_correct;
       aligned_expected += static_cast<int>(aligned.size());
       new_tiers.push_back(aligned_tier);

@@ -17,7 +17,10 @@
 //   placement_extents     interval tier: the same for placements
 //   keys_aligned          point tier (takes with a label tier): the expected
 //                         keys (the label tier's codes in order) aligned to
-//                         the posteriors, at their target frames
+//                         the posteriors, at their kinematic target times
+//                         (analysis/keys/key_timing.h)
+//   placement_aligned     point tier: the same keys' placement targets, where
+//                         the placement changes
 // Takes whose label tier is present are scored: accuracy at the labelled
 // frames, edit-distance alignment of the free decoding, aligned target error
 // (an aligned key is correct when its target lies within 40 ms of its label).

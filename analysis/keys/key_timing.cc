@@ -1,0 +1,240 @@
+#include "analysis/keys/key_timing.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+
+#include "core/error.h"
+
+namespace csw::keys {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Keys where the component differs from the previous key's (key 0 always).
+std::vector<size_t> Changes(const std::vector<ExpectedKey>& expected, bool shape) {
+  std::vector<size_t> out;
+  for (size_t k = 0; k < expected.size(); ++k) {
+    const int v = shape ? expected[k].shape : expected[k].placement;
+    const int u = k == 0 ? -1 : (shape ? expected[k - 1].shape : expected[k - 1].placement);
+    if (v != u) out.push_back(k);
+  }
+  return out;
+}
+
+// RMS standardised distance of row t of `x` to the mean of class `label`
+// (+inf when nothing is observed).
+double Distance(const GaussianClassifier& c, const Eigen::MatrixXd& x, int64_t t, int label) {
+  const Eigen::RowVectorXd row = x.row(t);
+  std::vector<double> closeness(static_cast<size_t>(c.num_labels()));
+  c.Closeness(row.data(), closeness.data());
+  const double v = closeness[static_cast<size_t>(label)];
+  return std::isnan(v) ? kInf : std::sqrt(std::max(0.0, -v));
+}
+
+// First frame of [start, end) whose distance comes within `tolerance` of the
+// segment's range above its smallest finite value; the middle of the segment
+// when nothing is observed.
+int64_t Arrival(int64_t start, int64_t end, double tolerance, const std::function<double(int64_t)>& distance) {
+  double lo = kInf, hi = -kInf;
+  std::vector<double> d(static_cast<size_t>(end - start));
+  for (int64_t t = start; t < end; ++t) {
+    d[static_cast<size_t>(t - start)] = distance(t);
+    const double v = d[static_cast<size_t>(t - start)];
+    if (std::isfinite(v)) {
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  }
+  if (!std::isfinite(lo)) return start + (end - start) / 2;
+  const double threshold = lo + tolerance * (hi - lo);
+  for (int64_t t = start; t < end; ++t)
+    if (d[static_cast<size_t>(t - start)] <= threshold) return t;
+  return start;
+}
+
+}  // namespace
+
+phasing::MovementFitOptions KeyTimingOptions::ShapeFitDefaults() {
+  phasing::MovementFitOptions o;
+  o.path_terms = 3;  // the distances are nonlinear in the joint angles (docs/analysis-phasing.md)
+  return o;
+}
+
+std::string KeyTimingOptions::Check() const {
+  std::string r = decode.Check();
+  if (!r.empty()) return r;
+  r = shape_fit.Check();
+  if (!r.empty()) return "shape fit: " + r;
+  r = placement_fit.Check();
+  if (!r.empty()) return "placement fit: " + r;
+  if (!(arrival_tolerance >= 0 && arrival_tolerance < 1)) return "arrival_tolerance must be in [0, 1)";
+  if (!(window_margin_s >= 0)) return "window_margin_s must be >= 0";
+  if (max_refits < 0) return "max_refits must be >= 0";
+  if (refinement_passes < 0) return "refinement_passes must be >= 0";
+  return "";
+}
+
+std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatures& features,
+                                         const KeyPosteriors& posteriors, const std::vector<ExpectedKey>& expected,
+                                         double rate_hz, const KeyTimingOptions& options) {
+  const std::string reason = options.Check();
+  if (!reason.empty()) throw InvalidInput("key timing: " + reason);
+  if (!(rate_hz > 0)) throw InvalidInput("key timing: the frame rate must be > 0");
+  if (features.frames() != posteriors.frames())
+    throw InvalidInput("key timing: " + std::to_string(features.frames()) + " feature frames but " +
+                       std::to_string(posteriors.frames()) + " posterior frames");
+  const std::vector<DecodedKey> decoded = DecodeAligned(posteriors, expected, rate_hz, options.decode);
+  const int64_t n = posteriors.frames();
+  const double end_s = static_cast<double>(n - 1) / rate_hz;
+  std::vector<TimedKey> out(decoded.size());
+  for (size_t k = 0; k < decoded.size(); ++k) out[k].key = decoded[k];
+
+  // Times one component: its changes, aligned segments, rough and kinematic targets.
+  auto time_component = [&](bool shape, const Eigen::MatrixXd& post, const Eigen::MatrixXd& x,
+                            const GaussianClassifier& classifier, const phasing::MovementFitOptions& fit) {
+    const std::vector<size_t> changes = Changes(expected, shape);
+    std::vector<int> labels;
+    for (size_t k : changes) labels.push_back(shape ? expected[k].shape : expected[k].placement);
+    // Each change's segment is kept near the joint segments of its keys.
+    std::vector<std::pair<int64_t, int64_t>> windows;
+    const auto margin = static_cast<int64_t>(std::llround(options.window_margin_s * rate_hz));
+    for (size_t i = 0; i < changes.size(); ++i) {
+      const size_t last = i + 1 < changes.size() ? changes[i + 1] - 1 : out.size() - 1;
+      windows.emplace_back(std::max<int64_t>(0, out[changes[i]].key.start_frame - margin),
+                           std::min<int64_t>(n, out[last].key.end_frame + margin));
+    }
+    const std::vector<ComponentSegment> segments = AlignComponent(post, labels, rate_hz, options.decode, windows);
+    std::vector<ComponentTiming> timing(changes.size());
+    for (size_t i = 0; i < changes.size(); ++i) {
+      ComponentTiming& c = timing[i];
+      c.changes = true;
+      c.segment_start = segments[i].start_frame;
+      c.segment_end = segments[i].end_frame;
+      const int label = labels[i];
+      c.rough_frame = Arrival(c.segment_start, c.segment_end, options.arrival_tolerance,
+                              [&](int64_t t) { return Distance(classifier, x, t, label); });
+      c.target_s = static_cast<double>(c.rough_frame) / rate_hz;
+      c.onset_s = kNaN;
+    }
+    if (options.kinematic) {
+      const phasing::SampledTrajectory traj{&x, rate_hz, 0.0};
+      // Pass 0 fits each movement around the rough targets; the refinement
+      // passes refit it with its neighbours' times taken from their fits.
+      std::vector<double> times(changes.size());
+      for (size_t i = 0; i < changes.size(); ++i) times[i] = static_cast<double>(timing[i].rough_frame) / rate_hz;
+      for (int pass = 0; pass <= options.refinement_passes; ++pass) {
+        std::vector<double> fitted = times;
+        for (size_t i = 1; i < changes.size(); ++i) {
+          const double previous = times[i - 1];
+          const double next = i + 1 < changes.size() ? times[i + 1] : std::min(end_s, times[i] + 0.3);
+          // A fit that stops at the edge of its tolerance around the guess is
+          // refitted around its own target (the guess was far off).
+          double guess = times[i];
+          phasing::MovementEstimate m;
+          for (int refit = 0; refit < options.max_refits + 1; ++refit) {
+            if (!(previous < guess && guess < next)) break;
+            m = phasing::EstimateMovement(traj, previous, guess, next, fit);
+            if (!m.moved || std::abs(m.target_s - guess) < 0.9 * fit.target_tolerance_s) break;
+            guess = m.target_s;
+          }
+          if (!m.moved) {
+            if (pass == 0) continue;
+            timing[i].kinematic = false;
+            continue;
+          }
+          timing[i].kinematic = true;
+          timing[i].onset_s = m.onset_s;
+          timing[i].target_s = m.target_s;
+          fitted[i] = m.target_s;
+        }
+        times = fitted;
+      }
+      for (auto& c : timing)
+        if (!c.kinematic) {
+          c.onset_s = kNaN;
+          c.target_s = static_cast<double>(c.rough_frame) / rate_hz;
+        }
+    }
+    // Every key: its own change, or the held component of the last change.
+    size_t i = 0;
+    for (size_t k = 0; k < out.size(); ++k) {
+      if (i + 1 < changes.size() && changes[i + 1] == k) ++i;
+      ComponentTiming c = timing[i];
+      c.changes = changes[i] == k;
+      (shape ? out[k].shape : out[k].placement) = c;
+    }
+  };
+  time_component(true, posteriors.shape, features.distances, model.shape, options.shape_fit);
+
+  // The placement point: the tip of the longest extended finger, blended
+  // between the index (weight 1 for the model's index shapes) and the middle
+  // finger over each shape movement (minimum-jerk profile between the timed
+  // onset and target; a rough change without a fit switches over 0.2 s).
+  Eigen::VectorXd lambda(n);
+  {
+    auto weight = [&](size_t k) { return model.IndexFinger(expected[k].shape) ? 1.0 : 0.0; };
+    double w0 = out.empty() ? 0.0 : weight(0);
+    lambda.setConstant(w0);
+    for (size_t k = 1; k < out.size(); ++k) {
+      if (!out[k].shape.changes) continue;
+      const double w1 = weight(k);
+      if (w1 != w0) {
+        const double target = out[k].shape.target_s;
+        const double onset = out[k].shape.kinematic ? out[k].shape.onset_s : target - 0.2;
+        for (int64_t t = 0; t < n; ++t) {
+          const double tau = std::clamp((static_cast<double>(t) / rate_hz - onset) / (target - onset), 0.0, 1.0);
+          lambda[t] += (w1 - w0) * tau * tau * tau * (10.0 - 15.0 * tau + 6.0 * tau * tau);
+        }
+      }
+      w0 = w1;
+    }
+  }
+  Eigen::MatrixXd tip(n, 3);
+  for (int64_t t = 0; t < n; ++t) {
+    const double w = std::clamp(lambda[t], 0.0, 1.0);
+    if (w >= 1.0)
+      tip.row(t) = features.index_tip.row(t);
+    else if (w <= 0.0)
+      tip.row(t) = features.middle_tip.row(t);
+    else
+      tip.row(t) = w * features.index_tip.row(t) + (1.0 - w) * features.middle_tip.row(t);
+  }
+  time_component(false, model.placement.Posteriors(tip), tip, model.placement, options.placement_fit);
+
+  if (!out.empty()) {
+    // The initial hold: left at the earliest fitted onset of the next movements.
+    TimedKey& first = out.front();
+    double leave = kInf;
+    for (size_t k = 1; k < out.size(); ++k) {
+      if (out[k].shape.changes && out[k].shape.kinematic && leave == kInf)
+        leave = std::min(leave, out[k].shape.onset_s);
+      if (out[k].shape.changes) break;
+    }
+    double leave_p = kInf;
+    for (size_t k = 1; k < out.size(); ++k) {
+      if (out[k].placement.changes && out[k].placement.kinematic) leave_p = out[k].placement.onset_s;
+      if (out[k].placement.changes) break;
+    }
+    leave = std::min(leave, leave_p);
+    if (first.shape.segment_start == 0 && first.placement.segment_start == 0 && std::isfinite(leave)) {
+      first.shape.target_s = first.placement.target_s = leave;
+      for (size_t k = 1; k < out.size() && !out[k].shape.changes; ++k) out[k].shape.target_s = leave;
+      for (size_t k = 1; k < out.size() && !out[k].placement.changes; ++k) out[k].placement.target_s = leave;
+    }
+  }
+  auto frame = [&](double s) { return std::clamp<int64_t>(std::llround(s * rate_hz), 0, n - 1); };
+  for (TimedKey& t : out) {
+    t.target_s = t.shape.changes       ? t.shape.target_s
+                 : t.placement.changes ? t.placement.target_s
+                                       : static_cast<double>(t.key.target_frame) / rate_hz;
+    t.key.shape_target_frame = frame(t.shape.target_s);
+    t.key.placement_target_frame = frame(t.placement.target_s);
+    t.key.target_frame = frame(t.target_s);
+  }
+  return out;
+}
+
+}  // namespace csw::keys

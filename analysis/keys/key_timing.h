@@ -1,0 +1,80 @@
+#pragma once
+// Key target times from kinematics (issue 11, scope item 4: the target frame
+// of every aligned key). DecodeAligned places each key's segment where its
+// posteriors dominate; the posteriors switch half-way through a movement and
+// saturate over a hold, so the frames inside a segment do not tell when the
+// hand arrived. Here each component is timed on its own:
+//
+// 1. Component segments. The shape labels of the expected keys, successive
+//    repeats merged, are aligned to the shape posteriors alone (AlignComponent);
+//    likewise the placements. A component that does not change between two keys
+//    has one segment for both (the hand does not move for it).
+// 2. Rough target: in the component's segment, the first frame whose distance
+//    to the class mean (the square root of minus GaussianClassifier::Closeness:
+//    the RMS standardised distance) comes within arrival_tolerance of the
+//    segment's range above its smallest value. For the placement the distance
+//    is that of the key's own finger tip (index for the model's index shapes,
+//    middle finger otherwise).
+// 3. Kinematic target: the movement into the target is fitted by superposed
+//    minimum-jerk gestures (phasing::EstimateMovement, three gestures: into the
+//    previous target, this one and the next) around the rough targets: the
+//    seven distances with curved paths for the shape, the key's finger tip in
+//    the head frame for the placement. When the fit says the component moved,
+//    its fitted onset and target replace the rough time.
+//
+// A key held from the take's first frame (the initial rest) has no movement
+// into it: its target is the instant the hand leaves it, the earliest fitted
+// onset of its components' next movements (the rough time when none is
+// fitted). A key's target (target_frame, target_s) is its shape target when the
+// shape changes, else its placement target, else the joint arrival of
+// DecodeAligned — the convention of the `keys` label tier (targets at the shape
+// targets, placement targets in a tier of their own).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "analysis/keys/hand_features.h"
+#include "analysis/keys/key_decoding.h"
+#include "analysis/keys/key_model.h"
+#include "analysis/phasing/movement_timing.h"
+
+namespace csw::keys {
+
+struct KeyTimingOptions {
+  DecodeOptions decode;
+  phasing::MovementFitOptions shape_fit = ShapeFitDefaults();
+  phasing::MovementFitOptions placement_fit;
+  double arrival_tolerance = 0.05;  // rough target: fraction of the segment's distance range
+  double window_margin_s = 0.15;    // component segments: how far outside their keys' joint segments
+  bool kinematic = true;            // false: rough targets only
+  int max_refits = 2;               // refits around a fitted target that hit its tolerance
+  int refinement_passes = 0;        // refits with the neighbours' fitted targets
+  std::string Check() const;        // "" when valid, else the reason
+  static phasing::MovementFitOptions ShapeFitDefaults();
+};
+
+// Timing of one component of one key.
+struct ComponentTiming {
+  bool changes = false;                        // differs from the previous key's (true for the first key)
+  bool kinematic = false;                      // onset and target from the movement fit
+  int64_t segment_start = 0, segment_end = 0;  // the component's aligned segment [start, end)
+  int64_t rough_frame = 0;                     // arrival in that segment
+  double onset_s = 0.0;                        // movement onset (NaN unless kinematic)
+  double target_s = 0.0;                       // target time: kinematic, else rough
+};
+
+struct TimedKey {
+  DecodedKey key;  // segment from DecodeAligned; target frames = rounded times below
+  ComponentTiming shape, placement;
+  double target_s = 0.0;
+};
+
+// Aligned decoding with kinematic target times. Times are seconds from the
+// take's first frame (frame f at f / rate_hz). Throws InvalidInput as
+// DecodeAligned, for bad options, or when the features and posteriors differ
+// in length.
+std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatures& features,
+                                         const KeyPosteriors& posteriors, const std::vector<ExpectedKey>& expected,
+                                         double rate_hz, const KeyTimingOptions& options = {});
+
+}  // namespace csw::keys
