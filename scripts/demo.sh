@@ -4,7 +4,9 @@
 # (datasets/demo, made by the virtual cuer) into out/demo/corpus.h5, prints
 # `csw info` of it, fits the face and hand models on the first third of the
 # sentences (out/demo/models.h5), inverts them on every sentence, fills the gaps
-# as new takes and writes the figures to out/demo/figures. Regenerate the demo
+# as new takes, trains the key recogniser on the filled training sentences
+# (out/demo/keys.h5), scores every filled sentence, measures the phasing and
+# writes the figures to out/demo/figures. Regenerate the demo
 # corpus with:
 #   csw simulate demo --seed 1 -o datasets/demo
 set -euo pipefail
@@ -40,3 +42,12 @@ echo "== csw fit face / hand on the first third of the sentences: $train"
   -o out/demo/models.h5 --figures out/demo/figures
 echo "== csw invert on every sentence, filling the gaps into <take>.filled"
 "$csw" invert out/demo/corpus.h5 --models out/demo/models.h5 --takes "$all" --fill --figures out/demo/figures
+filled=$(echo "$sentences" | sed 's/$/.filled/' | paste -sd, -)
+train_filled=$(echo "$train" | tr ',' '\n' | sed 's/$/.filled/' | paste -sd, -)
+rm -f out/demo/keys.h5
+echo "== csw keys train on the labelled targets of the filled training sentences"
+"$csw" keys train out/demo/corpus.h5 --takes "$train_filled" -o out/demo/keys.h5
+echo "== csw keys score on every filled sentence (gestural score, free and aligned decoding as tiers)"
+"$csw" keys score out/demo/corpus.h5 --keys out/demo/keys.h5 --takes "$filled"
+echo "== csw phasing (times relative to A1; histograms and gestural scores in out/demo/figures)"
+"$csw" phasing out/demo/corpus.h5 --keys out/demo/keys.h5 --takes "$filled" --figures out/demo/figures
