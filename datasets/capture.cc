@@ -220,8 +220,13 @@ void ApplyCaptureArtefacts(const VirtualCuer& cuer, const CaptureSetup& setup, s
     static const std::pair<const char*, const char*> kPairs[] = {{"ITIP", "MTIP"}, {"MTIP", "RTIP"}, {"I3D", "M3D"},
                                                                  {"M3D", "R3D"},   {"KNI", "KNM"},   {"FA2", "FA3"}};
     const auto& pr = kPairs[rng() % std::size(kPairs)];
+    // The default layout's names; another layout's hand names end with them ("RH_ITIP").
     auto col = [&](const char* name) {
-      auto it = std::find(r.take.marker_names.begin(), r.take.marker_names.end(), name);
+      const std::string n = name;
+      auto it = std::find_if(r.take.marker_names.begin(), r.take.marker_names.end(), [&](const std::string& m) {
+        return m == n || (m.size() > n.size() && m.compare(m.size() - n.size(), n.size(), n) == 0 &&
+                          m[m.size() - n.size() - 1] == '_');
+      });
       return static_cast<int>(it - r.take.marker_names.begin());
     };
     LabelSwap s;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <map>
 
+#include "core/error.h"
 #include "datasets/motion.h"
 #include "synth/phonetics.h"
 
@@ -18,14 +19,15 @@ struct MarkerSpec {
   std::string name;
   char role;  // 'r' rigid head, 'f' face, 't' throat
   double x, y, z;
-  double jaw;          // weight of the jaw (opening rotation and advance)
-  double protrude_y;   // forward per mm of protrusion
-  double protrude_x;   // towards the midline per mm of protrusion
-  double close_z;      // up per mm of closure
-  double raise_y;      // forward per mm of lip raising
-  double raise_z;      // up per mm of lip raising
-  double larynx_z;     // up per mm of larynx
-  double head_weight;  // 1 except on the throat
+  double jaw;                        // weight of the jaw (opening rotation and advance)
+  double protrude_y;                 // forward per mm of protrusion
+  double protrude_x;                 // towards the midline per mm of protrusion
+  double close_z;                    // up per mm of closure
+  double raise_y;                    // forward per mm of lip raising
+  double raise_z;                    // up per mm of lip raising
+  double larynx_z;                   // up per mm of larynx
+  double head_weight;                // 1 except on the throat: fraction of the head's rotation
+  double translation_weight = -1.0;  // fraction of the head's translation (< 0: head_weight)
 };
 
 // Jaw rotation axis (temporomandibular joint), head frame.
@@ -104,7 +106,51 @@ std::vector<MarkerSpec> Specs() {
   return s;
 }
 
+// Layout "lab2": a subset of the default markers under other names, and three
+// throat markers at the larynx that follow the head's translation fully and a
+// fraction of its rotation.
+const std::vector<std::pair<std::string, std::string>>& Lab2Names() {
+  static const std::vector<std::pair<std::string, std::string>> kNames = {
+      {"FHL", "HeadFrontL"},   {"FHR", "HeadFrontR"},   {"NAS", "Nasion"},     {"TMPL", "TempleL"},
+      {"TMPR", "TempleR"},     {"EBLI", "BrowL"},       {"EBRI", "BrowR"},     {"CKL2", "CheekL"},
+      {"CKR2", "CheekR"},      {"CKL3", "CheekLowL"},   {"CKR3", "CheekLowR"}, {"NSLL", "NasolabialL"},
+      {"NSLR", "NasolabialR"}, {"ULM", "UpperLip"},     {"ULL", "UpperLipL"},  {"ULR", "UpperLipR"},
+      {"LCL", "MouthCornerL"}, {"LCR", "MouthCornerR"}, {"LLM", "LowerLip"},   {"LLL", "LowerLipL"},
+      {"LLR", "LowerLipR"},    {"CHIN", "Chin"},        {"MNT", "UnderChin"},  {"JWL2", "JawL"},
+      {"JWR2", "JawR"}};
+  return kNames;
+}
+
+std::vector<MarkerSpec> Lab2Specs() {
+  const std::vector<MarkerSpec> all = Specs();
+  std::vector<MarkerSpec> s;
+  for (const auto& [from, to] : Lab2Names()) {
+    for (const MarkerSpec& m : all) {
+      if (m.name != from) continue;
+      MarkerSpec copy = m;
+      copy.name = to;
+      s.push_back(copy);
+    }
+  }
+  // Throat: a row over the larynx (between the default rows 2 and 3).
+  const double w = kLab2ThroatRotationWeight;
+  s.push_back({"LarynxR", 't', -20.0, 52.0, -126.0, 0.05, 0, 0, 0, 0, 0, 0.55, w, 1.0});
+  s.push_back({"LarynxM", 't', 0.0, 60.0, -124.0, 0.05, 0, 0, 0, 0, 0, 1.0, w, 1.0});
+  s.push_back({"LarynxL", 't', 20.0, 52.0, -126.0, 0.05, 0, 0, 0, 0, 0, 0.55, w, 1.0});
+  return s;
+}
+
 }  // namespace
+
+const std::vector<std::string>& SimulatorLayouts() {
+  static const std::vector<std::string> kLayouts = {"default", "lab2"};
+  return kLayouts;
+}
+
+bool IsSimulatorLayout(const std::string& name) {
+  const auto& l = SimulatorLayouts();
+  return std::find(l.begin(), l.end(), name) != l.end();
+}
 
 const char* ArticulatoryName(int parameter) {
   static const char* kNames[kNumArticulatory] = {"jaw_opening", "jaw_advance", "lip_protrusion",
@@ -121,12 +167,23 @@ Eigen::Isometry3d HeadMotion::Weighted(double weight) const {
   return x;
 }
 
-VirtualFace::VirtualFace() {
-  std::vector<MarkerSpec> specs = Specs();
+Eigen::Isometry3d HeadMotion::Weighted(double rotation_weight, double translation_weight) const {
+  Eigen::Isometry3d x = Weighted(rotation_weight);
+  x.translation() = translation * translation_weight;
+  return x;
+}
+
+VirtualFace::VirtualFace() : VirtualFace(std::string("default")) {}
+
+VirtualFace::VirtualFace(const std::string& layout) : layout_(layout) {
+  if (!IsSimulatorLayout(layout)) throw InvalidInput("unknown simulator layout \"" + layout + "\"");
+  const bool lab2 = layout == "lab2";
+  std::vector<MarkerSpec> specs = lab2 ? Lab2Specs() : Specs();
   const auto n = static_cast<Eigen::Index>(specs.size());
   neutral_.resize(3, n);
   basis_.assign(kNumArticulatory, Eigen::Matrix3Xd::Zero(3, n));
   head_weights_.resize(n);
+  translation_weights_.resize(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const MarkerSpec& m = specs[static_cast<size_t>(i)];
     names_.emplace_back(m.name);
@@ -136,6 +193,7 @@ VirtualFace::VirtualFace() {
     Eigen::Vector3d p(m.x, m.y, m.z);
     neutral_.col(i) = p;
     head_weights_[i] = m.head_weight;
+    translation_weights_[i] = m.translation_weight < 0.0 ? m.head_weight : m.translation_weight;
     // Jaw opening: linearised rotation about the TMJ axis (chin goes down and back).
     basis_[kJawOpening].col(i) = m.jaw * (-Eigen::Vector3d::UnitX()).cross(p - kJawCentre) / kJawRadius;
     basis_[kJawAdvance].col(i) = m.jaw * Eigen::Vector3d::UnitY();
@@ -152,6 +210,20 @@ VirtualFace::VirtualFace() {
       {"PHL", "PHR"},   {"LCH", "CHIN"},  {"CHNR", "CHIN"}, {"CHIN", "CHNL"}, {"CHNL", "JWL2"}, {"JWL2", "JWL1"},
       {"CHNR", "JWR2"}, {"JWR2", "JWR1"}, {"CHIN", "MNT"},  {"CHBL", "CKL1"}, {"CKL1", "CKL2"}, {"CKL2", "CKL3"},
       {"CHBR", "CKR1"}, {"CKR1", "CKR2"}, {"CKR2", "CKR3"}};
+  if (lab2) {
+    auto renamed = [](const std::string& a) {
+      for (const auto& [from, to] : Lab2Names())
+        if (from == a) return to;
+      return std::string();
+    };
+    for (const auto& [a, b] : sticks) {
+      const std::string ra = renamed(a), rb = renamed(b);
+      if (!ra.empty() && !rb.empty()) sticks_.emplace_back(ra, rb);
+    }
+    sticks_.emplace_back("LarynxR", "LarynxM");
+    sticks_.emplace_back("LarynxM", "LarynxL");
+    return;
+  }
   sticks_ = sticks;
   for (int r = 0; r < 6; ++r)
     for (int c = 0; c < 3; ++c) {
@@ -177,8 +249,8 @@ Eigen::Matrix3Xd VirtualFace::MarkersMoved(const ArticulatoryVector& p, const He
   Eigen::Matrix3Xd out = MarkersInHead(p);
   const Eigen::Isometry3d full = motion.Weighted(1.0);
   for (Eigen::Index i = 0; i < out.cols(); ++i) {
-    double w = head_weights_[i];
-    out.col(i) = (w == 1.0 ? full : motion.Weighted(w)) * Eigen::Vector3d(out.col(i));
+    const double w = head_weights_[i], wt = translation_weights_[i];
+    out.col(i) = (w == 1.0 && wt == 1.0 ? full : motion.Weighted(w, wt)) * Eigen::Vector3d(out.col(i));
   }
   return out;
 }

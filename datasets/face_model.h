@@ -34,11 +34,27 @@ struct HeadMotion {
   Eigen::Vector3d rotation = Eigen::Vector3d::Zero();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   Eigen::Isometry3d Weighted(double weight) const;
+  // Fraction rotation_weight of the rotation (about the head-frame origin) and
+  // translation_weight of the translation.
+  Eigen::Isometry3d Weighted(double rotation_weight, double translation_weight) const;
 };
+
+// Marker layouts the virtual cuer can write (docs/virtual-cuer.md, "Layouts"):
+// "default" (63 face, head and throat markers, 50 hand markers) and "lab2"
+// (another lab's layout: 5 head, 20 face and 3 throat markers with other
+// names, throat markers that follow the head's translation fully and only
+// kLab2ThroatRotationWeight of its rotation; 43 hand markers on a hand 8 %
+// smaller, 2 markers per phalanx).
+const std::vector<std::string>& SimulatorLayouts();
+bool IsSimulatorLayout(const std::string& name);
+inline constexpr double kLab2ThroatRotationWeight = 0.4;
+inline constexpr double kLab2HandScale = 0.92;
 
 class VirtualFace {
  public:
-  VirtualFace();  // the built-in 63-marker face
+  VirtualFace();  // the built-in 63-marker face (layout "default")
+  // The face of a simulator layout (SimulatorLayouts(); InvalidInput when unknown).
+  explicit VirtualFace(const std::string& layout);
 
   int num_markers() const { return static_cast<int>(names_.size()); }
   const std::vector<std::string>& marker_names() const { return names_; }
@@ -47,8 +63,14 @@ class VirtualFace {
   const Eigen::Matrix3Xd& neutral() const { return neutral_; }
   // Displacement per unit of each articulatory parameter (3 × 63 each).
   const Eigen::Matrix3Xd& basis(int parameter) const { return basis_[static_cast<size_t>(parameter)]; }
-  // Head weight of each marker: 1 for head and face markers, < 1 for throat markers.
+  // Head weight of each marker: 1 for head and face markers, < 1 for throat
+  // markers: the fraction of the head's rotation the marker follows.
   const Eigen::VectorXd& head_weights() const { return head_weights_; }
+  // Fraction of the head's translation each marker follows: equal to the head
+  // weight in the default layout (the weighted rigid motion); 1 for the
+  // throat markers of "lab2".
+  const Eigen::VectorXd& translation_weights() const { return translation_weights_; }
+  const std::string& layout() const { return layout_; }
 
   // Markers in the head frame, before head motion.
   Eigen::Matrix3Xd MarkersInHead(const ArticulatoryVector& p) const;
@@ -73,6 +95,8 @@ class VirtualFace {
   Eigen::Matrix3Xd neutral_;
   std::vector<Eigen::Matrix3Xd> basis_;
   Eigen::VectorXd head_weights_;
+  Eigen::VectorXd translation_weights_;
+  std::string layout_ = "default";
   std::vector<std::string> rigid_, face_, throat_;
   std::vector<std::pair<std::string, std::string>> sticks_;
 };

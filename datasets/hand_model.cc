@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/file_util.h"
 #include "core/json_util.h"
+#include "datasets/face_model.h"
 
 namespace csw {
 
@@ -159,7 +160,12 @@ struct VirtualHand::Frames {
   Eigen::Isometry3d frame[17];
 };
 
-VirtualHand::VirtualHand(HandConfig config) : config_(std::move(config)) {
+VirtualHand::VirtualHand(HandConfig config) : VirtualHand(std::move(config), "default") {}
+
+VirtualHand::VirtualHand(HandConfig config, const std::string& layout) : config_(std::move(config)) {
+  if (layout != "default" && layout != "lab2") throw InvalidInput("unknown simulator layout \"" + layout + "\"");
+  const bool lab2 = layout == "lab2";
+  if (lab2) scale_ = kLab2HandScale;
   static const char* kSuffix[5][4] = {{"thumb_cmc_flex", "thumb_cmc_abd", "thumb_mcp", "thumb_ip"},
                                       {"index_mcp_flex", "index_mcp_abd", "index_pip", "index_dip"},
                                       {"middle_mcp_flex", "middle_mcp_abd", "middle_pip", "middle_dip"},
@@ -178,7 +184,7 @@ VirtualHand::VirtualHand(HandConfig config) : config_(std::move(config)) {
     marker_names_.push_back(name);
     SkinMarker m;
     m.segment = segment;
-    m.local = local;
+    m.local = scale_ * local;
     markers_.push_back(m);
     return static_cast<int>(markers_.size()) - 1;
   };
@@ -268,6 +274,47 @@ VirtualHand::VirtualHand(HandConfig config) : config_(std::move(config)) {
                                                                              {"PD2", "KNM"},
                                                                              {"PD3", "KNL"}})
     sticks_.emplace_back(a, b);
+  if (lab2) ApplyLab2Layout();
+}
+
+void VirtualHand::ApplyLab2Layout() {
+  // Markers dropped: FA5, PD2 and the proximal marker of each distal phalanx.
+  auto dropped = [](const std::string& n) {
+    return n == "FA5" || n == "PD2" || (n.size() == 3 && n[1] == '3' && n[2] == 'P');
+  };
+  auto rename = [](const std::string& n) { return "RH_" + n; };
+  std::vector<std::string> names;
+  std::vector<SkinMarker> markers;
+  for (size_t i = 0; i < marker_names_.size(); ++i) {
+    if (dropped(marker_names_[i])) continue;
+    names.push_back(rename(marker_names_[i]));
+    markers.push_back(markers_[i]);
+  }
+  marker_names_ = std::move(names);
+  markers_ = std::move(markers);
+  auto filter = [&](std::vector<std::string>& list) {
+    std::vector<std::string> out;
+    for (const auto& n : list)
+      if (!dropped(n)) out.push_back(rename(n));
+    list = std::move(out);
+  };
+  filter(forearm_markers_);
+  filter(palm_markers_);
+  filter(fingertip_markers_);
+  for (SegmentMarkers& seg : segments_) filter(seg.markers);
+  // Sticks: a dropped distal marker's two sticks become one.
+  std::vector<std::pair<std::string, std::string>> sticks;
+  for (const auto& [a, b] : sticks_) {
+    if (dropped(a) && dropped(b)) continue;
+    if (dropped(b)) {
+      for (const auto& [c, d] : sticks_)
+        if (c == b && !dropped(d)) sticks.emplace_back(rename(a), rename(d));
+      continue;
+    }
+    if (dropped(a)) continue;
+    sticks.emplace_back(rename(a), rename(b));
+  }
+  sticks_ = std::move(sticks);
 }
 
 VirtualHand::Frames VirtualHand::ComputeFrames(const Eigen::VectorXd& angles) const {
@@ -284,11 +331,11 @@ VirtualHand::Frames VirtualHand::ComputeFrames(const Eigen::VectorXd& angles) co
     } else {
       base = Rz(g.fan_deg * kDeg) * Rz(angles[jt[1]]) * Rx(-angles[jt[0]]);
     }
-    Eigen::Isometry3d x = fr.frame[1] * Make(base, g.base);
+    Eigen::Isometry3d x = fr.frame[1] * Make(base, scale_ * g.base);
     fr.frame[SegmentIndex(f, 0)] = x;
-    x = x * Make(Rx(-angles[jt[2]]), Eigen::Vector3d(0.0, g.length[0], 0.0));
+    x = x * Make(Rx(-angles[jt[2]]), Eigen::Vector3d(0.0, scale_ * g.length[0], 0.0));
     fr.frame[SegmentIndex(f, 1)] = x;
-    x = x * Make(Rx(-angles[jt[3]]), Eigen::Vector3d(0.0, g.length[1], 0.0));
+    x = x * Make(Rx(-angles[jt[3]]), Eigen::Vector3d(0.0, scale_ * g.length[1], 0.0));
     fr.frame[SegmentIndex(f, 2)] = x;
   }
   return fr;
@@ -311,22 +358,26 @@ Eigen::Matrix3Xd VirtualHand::MarkersInForearm(const Eigen::VectorXd& angles) co
 
 Eigen::Vector3d VirtualHand::TipInForearm(const Eigen::VectorXd& angles, Finger finger) const {
   Frames fr = ComputeFrames(angles);
-  return fr.frame[SegmentIndex(finger, 2)] * Eigen::Vector3d(0.0, kFingers[finger].length[2], 0.0);
+  return fr.frame[SegmentIndex(finger, 2)] * Eigen::Vector3d(0.0, scale_ * kFingers[finger].length[2], 0.0);
 }
 
 std::vector<Capsule> VirtualHand::CapsulesInForearm(const Eigen::VectorXd& angles) const {
   Frames fr = ComputeFrames(angles);
   std::vector<Capsule> out;
-  out.push_back({"forearm", Eigen::Vector3d(0.0, -25.0, 0.0), Eigen::Vector3d(0.0, -260.0, -5.0), 30.0});
+  const double k = scale_;
+  out.push_back({"forearm", k * Eigen::Vector3d(0.0, -25.0, 0.0), k * Eigen::Vector3d(0.0, -260.0, -5.0), k * 30.0});
   const Eigen::Isometry3d& palm = fr.frame[1];
-  out.push_back({"palm", palm * Eigen::Vector3d(-14.0, 12.0, 0.0), palm * Eigen::Vector3d(-20.0, 80.0, 0.0), 12.0});
-  out.push_back({"palm", palm * Eigen::Vector3d(0.0, 12.0, 0.0), palm * Eigen::Vector3d(-2.0, 82.0, 0.0), 12.0});
-  out.push_back({"palm", palm * Eigen::Vector3d(14.0, 12.0, -2.0), palm * Eigen::Vector3d(26.0, 72.0, -4.0), 12.0});
+  out.push_back(
+      {"palm", palm * (k * Eigen::Vector3d(-14.0, 12.0, 0.0)), palm * (k * Eigen::Vector3d(-20.0, 80.0, 0.0)), k * 12});
+  out.push_back(
+      {"palm", palm * (k * Eigen::Vector3d(0.0, 12.0, 0.0)), palm * (k * Eigen::Vector3d(-2.0, 82.0, 0.0)), k * 12});
+  out.push_back(
+      {"palm", palm * (k * Eigen::Vector3d(14.0, 12.0, -2.0)), palm * (k * Eigen::Vector3d(26.0, 72.0, -4.0)), k * 12});
   for (int f = 0; f < 5; ++f)
     for (int p = 0; p < 3; ++p) {
       const Eigen::Isometry3d& x = fr.frame[SegmentIndex(f, p)];
       out.push_back({std::string(kFingers[f].name) + std::to_string(p + 1), x.translation(),
-                     x * Eigen::Vector3d(0.0, kFingers[f].length[p], 0.0), kFingers[f].radius[p] * 0.85});
+                     x * Eigen::Vector3d(0.0, k * kFingers[f].length[p], 0.0), k * kFingers[f].radius[p] * 0.85});
     }
   return out;
 }

@@ -60,6 +60,12 @@ class VirtualHand {
   enum Finger { kThumb = 0, kIndex = 1, kMiddle = 2, kRing = 3, kLittle = 4 };
 
   explicit VirtualHand(HandConfig config);
+  // The hand of a simulator layout (SimulatorLayouts() in face_model.h): "lab2"
+  // is kLab2HandScale the size and has 43 markers: no FA5 (6 forearm
+  // markers), no PD2, two markers on every phalanx (the distal ones: the
+  // dorsal distal marker and the nail), names prefixed "RH_". Throws InvalidInput for an unknown layout.
+  VirtualHand(HandConfig config, const std::string& layout);
+  double scale() const { return scale_; }
 
   const HandConfig& config() const { return config_; }
   int num_joints() const { return static_cast<int>(config_.joints.size()); }
@@ -90,6 +96,7 @@ class VirtualHand {
  private:
   struct Frames;
   Frames ComputeFrames(const Eigen::VectorXd& angles) const;
+  void ApplyLab2Layout();
 
   struct SkinMarker {
     int segment = 0;  // index into the frames of ComputeFrames
@@ -108,6 +115,7 @@ class VirtualHand {
   // Joint indices per finger: thumb {cmc_flex, cmc_abd, mcp, ip}, fingers {mcp_flex, mcp_abd, pip, dip}.
   int finger_joints_[5][4] = {};
   int wrist_flex_ = -1, wrist_dev_ = -1;
+  double scale_ = 1.0;  // hand size relative to the default geometry
 };
 
 }  // namespace csw

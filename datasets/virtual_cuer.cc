@@ -64,7 +64,7 @@ void ShiftUtterance(Utterance* u, double dt) {
 // Placement parameters of a key: reference point (3), frontal, pitch, twist, contact.
 Eigen::VectorXd PlacementVector(const PlacementDef& d, const VirtualFace& face) {
   Eigen::VectorXd z(7);
-  z.head<3>() = PlacementTarget(d, face);
+  z.head<3>() = PlacementTarget(d, face);  // face: the default layout's (placement anchors)
   z[3] = d.frontal_rad;
   z[4] = d.pitch_rad;
   z[5] = d.twist_rad;
@@ -96,6 +96,11 @@ bool ParseCorpusKind(const std::string& name, CorpusKind* kind) {
 }
 
 std::string SimulateOptions::Check() const {
+  if (!IsSimulatorLayout(layout)) {
+    std::string known;
+    for (const auto& l : SimulatorLayouts()) known += (known.empty() ? "" : ", ") + l;
+    return "unknown layout \"" + layout + "\" (known: " + known + ")";
+  }
   if (!(rate_hz >= 10.0 && rate_hz <= 2000.0)) return "rate_hz must be in [10, 2000]";
   if (!(noise_mm >= 0.0 && noise_mm <= 50.0)) return "noise_mm must be in [0, 50]";
   if (cameras < 1 || cameras > 64) return "cameras must be in [1, 64]";
@@ -121,10 +126,13 @@ std::string SimulateOptions::Check() const {
 
 VirtualCuer::VirtualCuer(const SimulateOptions& options)
     : options_(options),
-      hand_(options.hand_config_path.empty() ? DefaultHandConfig() : LoadHandConfig(options.hand_config_path)) {
+      hand_(options.hand_config_path.empty() ? DefaultHandConfig() : LoadHandConfig(options.hand_config_path),
+            IsSimulatorLayout(options.layout) ? options.layout : std::string("default")) {
   if (std::string why = options.Check(); !why.empty()) throw InvalidInput("simulate options: " + why);
-  placements_ = options.placement_config_path.empty() ? DefaultPlacementConfig()
-                                                      : LoadPlacementConfig(options.placement_config_path, &face_);
+  face_ = VirtualFace(options.layout);
+  placements_ = options.placement_config_path.empty()
+                    ? DefaultPlacementConfig()
+                    : LoadPlacementConfig(options.placement_config_path, &anchor_face_);
 }
 
 std::vector<std::string> VirtualCuer::AllMarkerNames() const {
@@ -136,7 +144,8 @@ std::vector<std::string> VirtualCuer::AllMarkerNames() const {
 MarkerSet VirtualCuer::MakeMarkerSet(CorpusKind kind) const {
   const bool face = kind != CorpusKind::kShapes, hand = kind != CorpusKind::kVisemes;
   MarkerSet set;
-  set.name = "csw-virtual-cuer";
+  const bool lab2 = options_.layout == "lab2";
+  set.name = lab2 ? "csw-virtual-cuer-lab2" : "csw-virtual-cuer";
   set.description = "Virtual cuer (csw datasets): " + std::to_string(face_.num_markers()) +
                     " face, head and throat markers and " + std::to_string(hand_.num_markers()) +
                     " right hand and forearm markers";
@@ -145,7 +154,10 @@ MarkerSet VirtualCuer::MakeMarkerSet(CorpusKind kind) const {
   for (const auto& t : face ? face_.throat_markers() : std::vector<std::string>{}) {
     ThroatMarker tm;
     tm.marker = t;
-    tm.head_weight = face_.head_weights()[face_.MarkerIndex(t)];
+    // The default layout's throat markers follow a fraction of the head's
+    // motion (a head weight); lab2's do not (full translation, part of the
+    // rotation): no weight is written, as for another lab's marker set.
+    if (!lab2) tm.head_weight = face_.head_weights()[face_.MarkerIndex(t)];
     set.throat.push_back(tm);
   }
   if (hand) {
@@ -185,7 +197,7 @@ Eigen::Isometry3d VirtualCuer::ForearmInHead(int placement, int shape) const {
       posture.angles, posture.reference_finger == "index" ? VirtualHand::kIndex : VirtualHand::kMiddle);
   Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
   x.linear() = rot;
-  x.translation() = PlacementTarget(d, face_) - rot * tip;
+  x.translation() = PlacementTarget(d, anchor_face_) - rot * tip;
   return x;
 }
 
@@ -366,7 +378,7 @@ SimulationResult VirtualCuer::Run(const std::string& name, const Script& script)
       shape_t[i].resize(nj + 1);
       shape_t[i].head(nj) = q;
       shape_t[i][nj] = p.reference_finger == "index" ? 1.0 : 0.0;
-      Eigen::VectorXd z = PlacementVector(placements_.At(script.pose_placement[i]), face_);
+      Eigen::VectorXd z = PlacementVector(placements_.At(script.pose_placement[i]), anchor_face_);
       for (int c = 0; c < 3; ++c) z[c] += normal(options_.placement_sd_mm);
       for (int c = 3; c < 6; ++c) z[c] += normal(options_.orientation_sd_deg * kDeg);
       place_t[i] = z;

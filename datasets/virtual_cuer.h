@@ -31,6 +31,11 @@ bool ParseCorpusKind(const std::string& name, CorpusKind* kind);
 
 struct SimulateOptions {
   CorpusKind kind = CorpusKind::kSentences;
+  // Marker layout (SimulatorLayouts(), datasets/face_model.h): "default" or
+  // "lab2" (another lab's markers: fewer face markers, 3 throat markers that
+  // follow the head's translation fully and its rotation partly, 2-marker
+  // phalanges, other names, a smaller hand).
+  std::string layout = "default";
   // Sentences to cue (kSentences); empty = the shipped list (datasets/sentences_fr.txt).
   std::vector<std::string> sentences;
   int count = 0;  // kSentences: first `count` sentences (0 = all)
@@ -136,7 +141,7 @@ class VirtualCuer {
   // markers of one corpus: shapes = head cluster and hand, visemes = face only.
   MarkerSet MakeMarkerSet() const { return MakeMarkerSet(CorpusKind::kSentences); }
   MarkerSet MakeMarkerSet(CorpusKind kind) const;
-  // All 113 marker names, face first then hand.
+  // All marker names (113 in the default layout), face first then hand.
   std::vector<std::string> AllMarkerNames() const;
 
   // A sentence from text (espeak-ng), cued or (visemes) without the hand.
@@ -172,6 +177,7 @@ class VirtualCuer {
   SimulateOptions options_;
   VirtualHand hand_;
   VirtualFace face_;
+  VirtualFace anchor_face_;  // the default layout's face: placements anchor on its markers
   PlacementConfig placements_;
 };
 

@@ -47,19 +47,27 @@ void CheckLayout(const FaceLayout& layout, const char* who) {
 
 // Head-frame position of a shape marker seen at `lab` for head pose (R, t):
 // solves lab = A x + w t + (1 − w) t̄ with A = w R + (1 − w) R̄.
-Eigen::Vector3d LabToHead(const Eigen::Vector3d& lab, const RigidTransform& pose, const RigidTransform& rest,
-                          double w) {
-  if (w == 1.0) return pose.rotation.transpose() * (lab - pose.translation);
+Eigen::Vector3d LabToHead(const Eigen::Vector3d& lab, const RigidTransform& pose, const RigidTransform& rest, double w,
+                          const Eigen::Vector3d& k = Eigen::Vector3d::Zero()) {
+  const Eigen::Vector3d l =
+      k.isZero() ? lab : Eigen::Vector3d(lab - (pose.rotation * rest.rotation.transpose() * k - k));
+  if (w == 1.0) return pose.rotation.transpose() * (l - pose.translation);
   const Eigen::Matrix3d a = w * pose.rotation + (1.0 - w) * rest.rotation;
-  const Eigen::Vector3d b = lab - w * pose.translation - (1.0 - w) * rest.translation;
+  const Eigen::Vector3d b = l - w * pose.translation - (1.0 - w) * rest.translation;
   return a.partialPivLu().solve(b);
+}
+
+Eigen::Vector3d OffsetOf(const FaceModel& model, int j) {
+  return model.rotation_offsets.rows() > j ? Eigen::Vector3d(model.rotation_offsets.row(j).transpose())
+                                           : Eigen::Vector3d::Zero();
 }
 
 // One throat marker over the selected frames, for ceres::TinySolver (header
 // only; the csw binary does not link the Ceres library): frame f gives the
-// 3 residuals A_f (m + L p_f) + w t_f + (1 - w) t_bar - obs_f, with
-// A_f = w R_f + (1 - w) R_bar; parameters x = (w, m (3), L (3 x P row-major)).
-// The Jacobian is analytic (column-major, as TinySolver expects).
+// 3 residuals A_f (m + L p_f) + w t_f + (1 - w) t_bar + (R_f R_barᵀ - I) k
+// - obs_f, with A_f = w R_f + (1 - w) R_bar; parameters x = (w, m (3),
+// L (3 x P row-major), k (3)). The Jacobian is analytic (column-major, as
+// TinySolver expects).
 struct ThroatProblem {
   using Scalar = double;
   enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = Eigen::Dynamic };
@@ -69,10 +77,11 @@ struct ThroatProblem {
   const Eigen::Matrix3Xd* observed = nullptr;
   int np = 0;
   int NumResiduals() const { return 3 * static_cast<int>(observed->cols()); }
-  int NumParameters() const { return 4 + 3 * np; }
+  int NumParameters() const { return 7 + 3 * np; }
 
   bool operator()(const double* x, double* residuals, double* jacobian) const {
     const double w = x[0];
+    const Eigen::Vector3d k(x[4 + 3 * np], x[5 + 3 * np], x[6 + 3 * np]);
     const Eigen::Index n = observed->cols();
     const Eigen::Index rows = 3 * n;
     for (Eigen::Index f = 0; f < n; ++f) {
@@ -80,11 +89,12 @@ struct ThroatProblem {
       const double* p = params->col(f).data();
       Eigen::Vector3d v(x[1], x[2], x[3]);
       for (int i = 0; i < 3; ++i) {
-        for (int k = 0; k < np; ++k) v(i) += x[4 + i * np + k] * p[k];
+        for (int c = 0; c < np; ++c) v(i) += x[4 + i * np + c] * p[c];
       }
       const Eigen::Matrix3d a = w * pose.rotation + (1.0 - w) * rest->rotation;
       Eigen::Map<Eigen::Vector3d> r(residuals + 3 * f);
-      r = a * v + w * pose.translation + (1.0 - w) * rest->translation - observed->col(f);
+      const Eigen::Matrix3d b = pose.rotation * rest->rotation.transpose() - Eigen::Matrix3d::Identity();
+      r = a * v + w * pose.translation + (1.0 - w) * rest->translation + b * k - observed->col(f);
       if (jacobian == nullptr) continue;
       const Eigen::Vector3d jw = (pose.rotation - rest->rotation) * v + pose.translation - rest->translation;
       for (int row = 0; row < 3; ++row) {
@@ -92,7 +102,8 @@ struct ThroatProblem {
         jacobian[rr] = jw(row);
         for (int i = 0; i < 3; ++i) {
           jacobian[(1 + i) * rows + rr] = a(row, i);
-          for (int k = 0; k < np; ++k) jacobian[(4 + i * np + k) * rows + rr] = a(row, i) * p[k];
+          for (int c = 0; c < np; ++c) jacobian[(4 + i * np + c) * rows + rr] = a(row, i) * p[c];
+          jacobian[(4 + 3 * np + i) * rows + rr] = b(row, i);
         }
       }
     }
@@ -121,6 +132,10 @@ Eigen::Matrix3Xd FaceModel::ShapeMarkersInLab(const RigidTransform& pose, const 
     const Eigen::Vector3d xj = x.segment<3>(3 * j);
     const double w = head_weights.size() == s ? head_weights(j) : 1.0;
     out.col(j) = w * pose.Apply(xj) + (1.0 - w) * rest_pose.Apply(xj);
+    if (rotation_offsets.rows() > j) {
+      const Eigen::Vector3d k = rotation_offsets.row(j).transpose();
+      out.col(j) += pose.rotation * rest_pose.rotation.transpose() * k - k;
+    }
   }
   return out;
 }
@@ -204,6 +219,7 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
 
   // Head weights: 1 for face markers; throat fixed or at the start value.
   model.head_weights = Eigen::VectorXd::Ones(ns);
+  model.rotation_offsets = Eigen::MatrixXd::Zero(ns, 3);
   std::vector<int> fitted;  // shape-marker indices of the fitted throat weights
   for (size_t i = 0; i < layout.throat.size(); ++i) {
     const int j = nf + static_cast<int>(i);
@@ -219,7 +235,7 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
   auto to_head = [&](int64_t frame, int j) -> Eigen::Vector3d {
     const float* p = lab.at(frame, j);
     return LabToHead(Eigen::Vector3d(p[0], p[1], p[2]), poses[static_cast<size_t>(frame)], model.rest_pose,
-                     model.head_weights(j));
+                     model.head_weights(j), OffsetOf(model, j));
   };
   {
     MarkerArray local(total_frames, ns);
@@ -277,12 +293,13 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
     const Eigen::MatrixXd params_rows = params.transpose();                 // P × n, one column per frame
     for (int j : fitted) {
       double w = model.head_weights(j);
-      Eigen::VectorXd x(4 + 3 * num_params);
+      Eigen::VectorXd x(7 + 3 * num_params);
       x(0) = w;
       x.segment<3>(1) = shape.mean.segment<3>(3 * j);
       for (int i = 0; i < 3; ++i) {
         for (int k = 0; k < num_params; ++k) x(4 + i * num_params + k) = shape.loadings(3 * j + i, k);
       }
+      x.tail<3>() = model.rotation_offsets.row(j).transpose();
       Eigen::Matrix3Xd observed(3, n);
       for (int64_t f = 0; f < n; ++f) {
         const float* o = lab.at(f, j);
@@ -295,7 +312,7 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
       problem.observed = &observed;
       problem.np = num_params;
       // Unconstrained Levenberg-Marquardt; the weight is then clamped to [0, 1]
-      // (only w is kept: the shape is refitted by the next round's PCA).
+      // (only w and k are kept: the shape is refitted by the next round's PCA).
       ceres::TinySolver<ThroatProblem> solver;
       solver.options.max_num_iterations = 51;  // the start counts as one
       solver.options.function_tolerance = 1e-12;
@@ -303,7 +320,10 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
       solver.options.parameter_tolerance = 1e-12;
       solver.Solve(problem, &x);
       w = x(0);
-      if (std::isfinite(w)) model.head_weights(j) = std::clamp(w, 0.0, 1.0);
+      if (std::isfinite(w) && x.tail<3>().allFinite()) {
+        model.head_weights(j) = std::clamp(w, 0.0, 1.0);
+        model.rotation_offsets.row(j) = x.tail<3>().transpose();
+      }
       if (progress) progress->CheckCancel();
     }
   }
@@ -326,6 +346,8 @@ struct Prepared {
   Eigen::VectorXd mean;           // 3ns
   Eigen::MatrixXd loadings;       // 3ns × np
   Eigen::VectorXd weights;        // ns
+  Eigen::Matrix3Xd offsets;       // 3 × ns: k_j (rotation offsets)
+  Eigen::Matrix3Xd rest_offsets;  // 3 × ns: R̄ᵀ k_j
   Eigen::VectorXd rest_mean;      // 3ns: (1 − w)(R̄ m_j + t̄)
   Eigen::MatrixXd rest_loadings;  // 3ns × np: (1 − w) R̄ L_j
   RigidTransform rest;
@@ -342,7 +364,7 @@ struct Prepared {
 // respect to the shape parameters is the constant loading block, and with
 // respect to δ it is −[y]× R0ᵀ J_l(δ)ᵀ with y = Rᵀ(obs − t) (exact: J_l is
 // the left Jacobian of SO(3)). Throat markers (w < 1) keep the lab residual
-// w (R x + t) + (1 − w)(R̄ x + t̄) − obs.
+// w (R x + t) + (1 − w)(R̄ x + t̄) + (R R̄ᵀ − I) k − obs.
 template <int kNumParameters>
 struct FrameProblem {
   using Scalar = double;
@@ -419,9 +441,10 @@ struct FrameProblem {
       }
       const double w = m->weights(j);
       const Eigen::Vector3d u = r * x_head.segment<3>(3 * j);
-      res.segment<3>(row) = w * (u + t) + x_rest.segment<3>(3 * j) - obs.col(nh + j);
+      const Eigen::Vector3d v = r * m->rest_offsets.col(j);
+      res.segment<3>(row) = w * (u + t) + x_rest.segment<3>(3 * j) + v - m->offsets.col(j) - obs.col(nh + j);
       if (jacobian) {
-        jac.block<3, 3>(row, 0) = -w * so3::Hat(u) * jl;
+        jac.block<3, 3>(row, 0) = -so3::Hat(w * u + v) * jl;
         jac.block(row, 3, 3, 3).diagonal().setConstant(w);
         jac.block(row, 6, 3, np).noalias() = (w * r) * m->loadings.middleRows(3 * j, 3);
         jac.block(row, 6, 3, np) += m->rest_loadings.middleRows(3 * j, 3);
@@ -504,7 +527,8 @@ void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray
       std::vector<bool> mask(static_cast<size_t>(3 * ns), false);
       for (int j = 0; j < ns; ++j) {
         if (!problem.visible[static_cast<size_t>(nh + j)]) continue;
-        coords.segment<3>(3 * j) = LabToHead(problem.obs.col(nh + j), fit.transform, prep.rest, prep.weights(j));
+        coords.segment<3>(3 * j) =
+            LabToHead(problem.obs.col(nh + j), fit.transform, prep.rest, prep.weights(j), prep.offsets.col(j));
         for (int k = 0; k < 3; ++k) mask[static_cast<size_t>(3 * j + k)] = true;
       }
       prev_p = np > 0 ? model.shape.Estimate(coords, mask) : Eigen::VectorXd();
@@ -546,7 +570,8 @@ void SolveFrames(const FaceModel& model, const Prepared& prep, const MarkerArray
     const Eigen::VectorXd xr = prep.rest_mean + prep.rest_loadings * p;
     for (int j = 0; j < ns; ++j) {
       const double w = prep.weights(j);
-      lab.col(nh + j) = w * (pose.rotation * xh.segment<3>(3 * j) + pose.translation) + xr.segment<3>(3 * j);
+      lab.col(nh + j) = w * (pose.rotation * xh.segment<3>(3 * j) + pose.translation) + xr.segment<3>(3 * j) +
+                        pose.rotation * prep.rest_offsets.col(j) - prep.offsets.col(j);
     }
     for (int c = 0; c < nm; ++c) {
       float* q = out.reconstructed.at(f, c);
@@ -589,6 +614,15 @@ InversionResult InvertFace(const FaceModel& model, const MarkerArray& take, cons
   prep.loadings = model.shape.loadings;
   prep.weights = model.head_weights;
   prep.rest = model.rest_pose;
+  prep.offsets = Eigen::Matrix3Xd::Zero(3, ns);
+  if (model.rotation_offsets.size() > 0) {
+    if (model.rotation_offsets.rows() != ns || model.rotation_offsets.cols() != 3) {
+      throw InvalidInput("face inversion: the model has " + std::to_string(model.rotation_offsets.rows()) +
+                         " rotation offsets for " + std::to_string(ns) + " shape markers");
+    }
+    prep.offsets = model.rotation_offsets.transpose();
+  }
+  prep.rest_offsets = prep.rest.rotation.transpose() * prep.offsets;
   prep.rest_mean.resize(3 * ns);
   prep.rest_loadings.resize(3 * ns, np);
   for (int j = 0; j < ns; ++j) {

@@ -19,6 +19,20 @@
 // for face markers). For small head motions this equals applying the fraction
 // w of the motion. The weights not fixed by the marker set are fitted jointly
 // with the shape directions (Ceres; FitFaceModel).
+//
+// A blend moves a throat marker by the same fraction w of the head's rotation
+// and of its translation. Skin that hangs from the torso can follow the
+// head's translation fully and its rotation only partly (about a pivot other
+// than the head frame's origin), which no w reproduces. So a throat marker
+// whose weight is fitted also gets a rotation offset k (mm, lab axes at the
+// rest pose), fitted with it:
+//     lab = w · (R x + t) + (1 − w) · (R̄ x + t̄) + (R R̄ᵀ − I) k.
+// To first order the marker moves by w (δ × R̄x + τ) + δ × k for a head
+// rotation δ and translation τ from rest: w sets how much of the
+// translation it follows, and k shifts the lever arm of the rotation (a
+// marker following all of τ and a fraction a of the rotation about a pivot c
+// has w = 1, k = (a − 1)(R̄x + t̄ − c)). k = 0 is the blend.
+
 #include <Eigen/Core>
 #include <string>
 #include <vector>
@@ -58,7 +72,11 @@ struct FaceModel {
   RigidModel head;               // cluster reference and motion PCA (nmF)
   Eigen::VectorXd head_weights;  // one per shape marker: 1 for face, w for throat (fixed or fitted)
   RigidTransform rest_pose;      // (R̄, t̄) above
-  GuidedPcaModel shape;          // over the shape markers, head frame
+  // k above, one row per shape marker (shape markers × 3, zero rows for the
+  // face and for throat markers with a fixed weight); empty = all zero (model
+  // files written before it existed).
+  Eigen::MatrixXd rotation_offsets;
+  GuidedPcaModel shape;  // over the shape markers, head frame
   ModelInfo info;
 
   int num_parameters() const { return shape.num_parameters(); }

@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <string>
 
@@ -166,11 +167,7 @@ int GaussianFiller::Fill(Eigen::Matrix3Xd* markers) {
     seen += pattern[static_cast<size_t>(m)];
   }
   if (seen == 0 || seen == nm) return 0;
-  if (pattern != pattern_) {
-    Indices(pattern, &seen_, &missing_);
-    gain_ = Gain(precision_, fill_.ridge_mm2, seen_, missing_, nullptr);
-    pattern_ = pattern;
-  }
+  SetPattern(pattern);
   Eigen::VectorXd dv(static_cast<Eigen::Index>(seen_.size()));
   for (size_t a = 0; a < seen_.size(); ++a) {
     dv(static_cast<Eigen::Index>(a)) = (*markers)(seen_[a] % 3, seen_[a] / 3) - fill_.mean(seen_[a]);
@@ -180,6 +177,37 @@ int GaussianFiller::Fill(Eigen::Matrix3Xd* markers) {
     (*markers)(missing_[b] % 3, missing_[b] / 3) = fill_.mean(missing_[b]) + xh(static_cast<Eigen::Index>(b));
   }
   return static_cast<int>(nm - seen);
+}
+
+void GaussianFiller::SetPattern(const std::vector<uint8_t>& pattern) {
+  if (pattern == pattern_) return;
+  Indices(pattern, &seen_, &missing_);
+  gain_ = Gain(precision_, fill_.ridge_mm2, seen_, missing_, nullptr);
+  pattern_ = pattern;
+}
+
+Eigen::Vector3d GaussianFiller::Predict(const std::vector<uint8_t>& pattern, int marker,
+                                        const Eigen::Matrix3Xd& markers) {
+  const Eigen::Index nm = fill_.markers();
+  if (markers.cols() != nm || static_cast<Eigen::Index>(pattern.size()) != nm) {
+    throw InvalidInput("gaussian fill: " + std::to_string(markers.cols()) + " markers given, the fill has " +
+                       std::to_string(nm));
+  }
+  const Eigen::Vector3d nan = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  if (marker < 0 || marker >= nm || pattern[static_cast<size_t>(marker)]) return nan;
+  int seen = 0;
+  for (uint8_t v : pattern) seen += v ? 1 : 0;
+  if (seen == 0) return nan;
+  SetPattern(pattern);
+  // Rows of the marker's three coordinates in the missing block.
+  const auto it = std::lower_bound(missing_.begin(), missing_.end(), 3 * marker);
+  const Eigen::Index row = it - missing_.begin();
+  Eigen::Vector3d out = fill_.mean.segment<3>(3 * marker);
+  for (size_t a = 0; a < seen_.size(); ++a) {
+    const double dv = markers(seen_[a] % 3, seen_[a] / 3) - fill_.mean(seen_[a]);
+    for (int k = 0; k < 3; ++k) out(k) += gain_(row + k, static_cast<Eigen::Index>(a)) * dv;
+  }
+  return out;
 }
 
 }  // namespace csw

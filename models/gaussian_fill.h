@@ -53,8 +53,16 @@ class GaussianFiller {
   // markers: 3 × markers, NaN columns missing; fills them in place. Returns
   // the number filled (0 when nothing is seen or nothing is missing).
   int Fill(Eigen::Matrix3Xd* markers);
+  // The conditional mean of one marker `marker` (missing from `pattern`,
+  // 1 = seen, one entry per marker) given the seen markers of `markers`
+  // (3 × markers; only the columns seen in `pattern` are read and must be
+  // finite). Reuses the gain of the last pattern. NaN when nothing is seen or
+  // `marker` is seen in `pattern`.
+  Eigen::Vector3d Predict(const std::vector<uint8_t>& pattern, int marker, const Eigen::Matrix3Xd& markers);
 
  private:
+  void SetPattern(const std::vector<uint8_t>& pattern);
+
   const GaussianFill& fill_;
   Eigen::MatrixXd precision_;        // (Σ + ρI)⁻¹
   std::vector<uint8_t> pattern_;     // seen markers of the cached gain

@@ -903,4 +903,121 @@ InversionResult InvertHand(const HandModel& model, const MarkerArray& take, cons
   return out;
 }
 
+int64_t CorrectFilledGapsWithEdgeMisfits(const HandModel& model, const MarkerArray& input, InversionResult* result,
+                                         int64_t fade_frames) {
+  const int nf = static_cast<int>(model.forearm.reference.cols());
+  const int nh = model.layout.num_shape_markers();
+  MarkerArray& rec = result->reconstructed;
+  if (model.fill.empty() || model.fill.markers() != nh) {
+    throw InvalidInput("filled-gap correction: the hand model has no gap filler for its " + std::to_string(nh) +
+                       " hand markers");
+  }
+  if (input.markers() != nf + nh || rec.markers() != nf + nh || rec.frames() != input.frames() ||
+      result->pose.rows() != input.frames()) {
+    throw InvalidInput("filled-gap correction: input is " + std::to_string(input.frames()) + "×" +
+                       std::to_string(input.markers()) + " markers, the reconstruction " +
+                       std::to_string(rec.frames()) + "×" + std::to_string(rec.markers()) + ", the model has " +
+                       std::to_string(nf + nh));
+  }
+  const int64_t frames = input.frames();
+  constexpr int kEdgeFrames = 4;
+  // Per frame: pose, hand markers in the forearm frame (seen: observed;
+  // missing: as filled, NaN when not), the pattern of seen hand markers.
+  std::vector<RigidTransform> pose(static_cast<size_t>(frames));
+  std::vector<uint8_t> solved(static_cast<size_t>(frames), 0);
+  std::vector<Eigen::Matrix3Xd> local(static_cast<size_t>(frames));
+  std::vector<std::vector<uint8_t>> seen(static_cast<size_t>(frames), std::vector<uint8_t>(static_cast<size_t>(nh), 0));
+  for (int64_t f = 0; f < frames; ++f) {
+    const Eigen::Matrix<double, 6, 1> pr = result->pose.row(f).transpose();
+    if (!pr.allFinite()) continue;
+    solved[static_cast<size_t>(f)] = 1;
+    pose[static_cast<size_t>(f)] = RigidTransform::FromParameters(pr);
+    const RigidTransform& x = pose[static_cast<size_t>(f)];
+    Eigen::Matrix3Xd& l = local[static_cast<size_t>(f)];
+    l.resize(3, nh);
+    for (int j = 0; j < nh; ++j) {
+      const bool v = input.Visible(f, nf + j);
+      seen[static_cast<size_t>(f)][static_cast<size_t>(j)] = v ? 1 : 0;
+      const float* q = v ? input.at(f, nf + j) : rec.at(f, nf + j);
+      l.col(j) = IsMissing(q[0])
+                     ? Eigen::Vector3d::Constant(kNaN)
+                     : Eigen::Vector3d(x.rotation.transpose() * (Eigen::Vector3d(q[0], q[1], q[2]) - x.translation));
+    }
+  }
+  // Each missing sample's gap [a, b) of its marker.
+  Eigen::Matrix<int64_t, Eigen::Dynamic, Eigen::Dynamic> gap_a(frames, nh), gap_b(frames, nh);
+  for (int j = 0; j < nh; ++j) {
+    int64_t f = 0;
+    while (f < frames) {
+      if (input.Visible(f, nf + j)) {
+        ++f;
+        continue;
+      }
+      const int64_t a = f;
+      while (f < frames && !input.Visible(f, nf + j)) ++f;
+      for (int64_t g = a; g < f; ++g) {
+        gap_a(g, j) = a;
+        gap_b(g, j) = f;
+      }
+    }
+  }
+  GaussianFiller filler(model.fill);
+  int64_t corrected = 0;
+  for (int64_t g = 0; g < frames; ++g) {
+    if (!solved[static_cast<size_t>(g)]) continue;
+    const std::vector<uint8_t>& pattern = seen[static_cast<size_t>(g)];
+    int nseen = 0;
+    for (uint8_t v : pattern) nseen += v;
+    if (nseen == 0 || nseen == nh) continue;
+    // Whether frame e can be predicted with g's pattern: solved and every
+    // marker seen at g known at e.
+    auto usable = [&](int64_t e) {
+      if (e < 0 || e >= frames || !solved[static_cast<size_t>(e)]) return false;
+      const Eigen::Matrix3Xd& l = local[static_cast<size_t>(e)];
+      for (int j = 0; j < nh; ++j)
+        if (pattern[static_cast<size_t>(j)] && !l.col(j).allFinite()) return false;
+      return true;
+    };
+    for (int j = 0; j < nh; ++j) {
+      if (pattern[static_cast<size_t>(j)] || !local[static_cast<size_t>(g)].col(j).allFinite()) continue;
+      // Mean misfit over up to kEdgeFrames frames from e outwards where j is seen.
+      auto misfit = [&](int64_t e, int step, Eigen::Vector3d* out) {
+        out->setZero();
+        int n = 0;
+        for (int k = 0; k < kEdgeFrames && e >= 0 && e < frames && input.Visible(e, nf + j); ++k, e += step) {
+          if (!usable(e)) continue;
+          const Eigen::Matrix3Xd& l = local[static_cast<size_t>(e)];
+          *out += l.col(j) - filler.Predict(pattern, j, l);
+          ++n;
+        }
+        if (n == 0) return false;
+        *out /= n;
+        return true;
+      };
+      const int64_t a = gap_a(g, j), b = gap_b(g, j);
+      Eigen::Vector3d left, right;
+      const bool has_left = misfit(a - 1, -1, &left), has_right = misfit(b, +1, &right);
+      if (!has_left && !has_right) continue;
+      Eigen::Vector3d add;
+      if (has_left && has_right) {
+        const double t = static_cast<double>(g - a + 1) / static_cast<double>(b - a + 1);
+        add = (1 - t) * left + t * right;
+      } else {
+        const int64_t distance = has_left ? g - a + 1 : b - g;
+        const double w = fade_frames > 0
+                             ? std::max(0.0, 1.0 - static_cast<double>(distance) / static_cast<double>(fade_frames))
+                             : 1.0;
+        add = w * (has_left ? left : right);
+      }
+      if (!add.allFinite()) continue;
+      const RigidTransform& x = pose[static_cast<size_t>(g)];
+      const Eigen::Vector3d lab = x.rotation * (local[static_cast<size_t>(g)].col(j) + add) + x.translation;
+      float* o = rec.at(g, nf + j);
+      for (int k = 0; k < 3; ++k) o[k] = static_cast<float>(lab(k));
+      ++corrected;
+    }
+  }
+  return corrected;
+}
+
 }  // namespace csw

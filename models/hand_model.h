@@ -142,4 +142,22 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
 InversionResult InvertHand(const HandModel& model, const MarkerArray& take, const InversionOptions& options = {},
                            Progress* progress = nullptr);
 
+// Temporal correction of the hand markers the Gaussian gap filler filled (the
+// filler's counterpart of CorrectGapsWithEdgeResiduals, inversion.h). The
+// filler's error for a marker depends on which markers are seen and on the
+// posture, both of which change slowly, while the marker itself is seen just
+// before and after its gap. For every filled sample (frame g, marker m), the
+// filler's misfit is measured at up to 4 visible frames e on each side of m's
+// gap WITH g's pattern of seen markers: observed m at e minus the filler's
+// prediction of m from e's markers (e's own gaps filled) restricted to those
+// seen at g, in the forearm frame. The mean misfit of each side is
+// interpolated linearly across the gap (one edge only: fading to zero over
+// fade_frames) and added. A marker hidden in one frame next to frames where
+// the rest of its finger is hidden too (the filler's worst case, 20-50 mm on
+// the virtual cuer) comes back within a few millimetres. Needs result from
+// InvertHand(model, input) with the filler; returns the samples corrected.
+// Throws InvalidInput on a shape mismatch or a model without a filler.
+int64_t CorrectFilledGapsWithEdgeMisfits(const HandModel& model, const MarkerArray& input, InversionResult* result,
+                                         int64_t fade_frames = 60);
+
 }  // namespace csw

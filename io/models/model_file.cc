@@ -244,6 +244,11 @@ void ValidateFace(const FaceModel& m, const std::string& object, const Checker& 
   }
   ValidateRotation(m.rest_pose.rotation, object + "/rest_pose/rotation", c);
   RequireFinite(m.rest_pose.translation, object + "/rest_pose/translation", c);
+  if (m.rotation_offsets.size() > 0) {
+    RequireShape(m.rotation_offsets, shapes, 3, object + "/rotation_offsets", "one row (x y z, mm) per shape marker",
+                 c);
+    RequireFinite(m.rotation_offsets, object + "/rotation_offsets", c);
+  }
   ValidateGuidedPca(m.shape, shapes, object + "/shape", c);
   ValidateInfo(m.info, object, c);
 }
@@ -414,6 +419,9 @@ void WriteFace(hid_t parent, const FaceModel& m, const Where& where) {
 
   WriteRigid(g.get(), "head", m.head, where, object + "/head");
   WriteVector(g.get(), "head_weights", m.head_weights, where, object + "/head_weights");
+  if (m.rotation_offsets.size() > 0) {
+    WriteMatrix(g.get(), "rotation_offsets", m.rotation_offsets, where, object + "/rotation_offsets");
+  }
 
   const std::string po = object + "/rest_pose";
   Handle pg = h5::CreateGroup(g.get(), "rest_pose", where, po);
@@ -697,6 +705,10 @@ FaceModel ReadFace(hid_t parent, const Checker& c) {
 
   m.head = ReadRigid(g.get(), "head", object + "/head", c);
   m.head_weights = ReadVector(g.get(), "head_weights", object + "/head_weights", c);
+  // Optional (files written before the throat rotation offsets: all zero).
+  if (h5::LinkExists(g.get(), "rotation_offsets")) {
+    m.rotation_offsets = ReadMatrix(g.get(), "rotation_offsets", object + "/rotation_offsets", c);
+  }
 
   const std::string po = object + "/rest_pose";
   Handle pg = OpenGroupChecked(g.get(), "rest_pose", po, c);

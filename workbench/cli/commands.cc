@@ -174,6 +174,11 @@ class SimulateCommand : public Command {
         ->capture_default_str();
     sub_->add_flag("--label-swaps", options_.label_swaps, "Add a temporary swap of two hand marker labels per take");
     sub_->add_flag("--clean", options_.clean, "Also write <take>.clean.c3d without capture artefacts");
+    sub_->add_option("--layout", options_.layout,
+                     "Marker layout: default, or lab2 (another lab's: 28 face/head/throat markers whose 3 throat "
+                     "markers follow the head's translation fully and its rotation partly, 43 hand markers with "
+                     "2-marker phalanges, other names, a smaller hand; docs/virtual-cuer.md)")
+        ->capture_default_str();
     sub_->add_option("--phasing", options_.phasing_file,
                      "Phasing-model JSON (docs/virtual-cuer.md): gesture start/target laws instead of the defaults");
   }

@@ -171,8 +171,13 @@ void FitFace(const FitContext& x, ModelFile* update) {
   WithProvenance(x.info, &m.head.info);
   json throat = json::array();
   for (size_t i = 0; i < layout.throat.size(); ++i) {
+    const auto j = static_cast<Eigen::Index>(layout.face.size() + i);
+    json offset = json::array({0.0, 0.0, 0.0});
+    if (m.rotation_offsets.rows() > j)
+      offset = {m.rotation_offsets(j, 0), m.rotation_offsets(j, 1), m.rotation_offsets(j, 2)};
     throat.push_back({{"marker", layout.throat[i]},
-                      {"head_weight", m.head_weights(static_cast<Eigen::Index>(layout.face.size() + i))},
+                      {"head_weight", m.head_weights(j)},
+                      {"rotation_offset_mm", offset},
                       {"fitted", std::isnan(layout.throat_weights[i])}});
   }
   x.summary["face"] = {{"parameters", m.shape.parameter_names},

@@ -424,10 +424,12 @@ json Invert(const InvertOptions& options, Progress& progress) {
     job.result = job.run->face ? InvertFace(*job.run->face, job.input, options.inversion, &item)
                                : InvertHand(*job.run->hand, job.input, options.inversion, &item);
     job.model_only = job.result.reconstructed;
-    // The edge misfit is the shape model's; a hand whose gaps the Gaussian
-    // filler reconstructed (not the shape model) is left as filled.
+    // A hand whose gaps the Gaussian filler reconstructed (not the shape
+    // model) gets the filler's edge misfit, measured with each frame's
+    // pattern of seen markers; the others the model's.
     const bool gaussian = job.run->hand && !job.run->hand->fill.empty() && options.inversion.gaussian_fill;
     if (options.edge_correction && !gaussian) CorrectGapsWithEdgeResiduals(job.input, &job.result);
+    if (options.edge_correction && gaussian) CorrectFilledGapsWithEdgeMisfits(*job.run->hand, job.input, &job.result);
     job.frames = MakeFrameReports(job);
   });
 
@@ -519,6 +521,7 @@ MarkerArray ModelReconstruction(const Take& take, const InvertOptions& options, 
                                        : InvertHand(*run->hand, input, options.inversion, &progress);
     const bool gaussian = run->hand && !run->hand->fill.empty() && options.inversion.gaussian_fill;
     if (options.edge_correction && !gaussian) CorrectGapsWithEdgeResiduals(input, &result);
+    if (options.edge_correction && gaussian) CorrectFilledGapsWithEdgeMisfits(*run->hand, input, &result);
     for (int64_t f = 0; f < result.frames(); ++f) {
       for (size_t c = 0; c < cols.size(); ++c) {
         const float* src = result.reconstructed.at(f, static_cast<int64_t>(c));

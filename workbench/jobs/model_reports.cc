@@ -1,6 +1,7 @@
 #include "workbench/jobs/model_reports.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -74,7 +75,15 @@ std::string FitText(const json& s) {
     variance(f["parameters"], f["variance_explained"]);
     for (const auto& t : f["throat"]) {
       o << "    throat " << t["marker"].get<std::string>() << ": head weight " << t["head_weight"].get<double>()
-        << (t["fitted"].get<bool>() ? " (fitted)" : " (fixed)") << "\n";
+        << (t["fitted"].get<bool>() ? " (fitted)" : " (fixed)");
+      if (t.contains("rotation_offset_mm")) {
+        const json& k = t["rotation_offset_mm"];
+        char buf[96];
+        std::snprintf(buf, sizeof buf, ", rotation offset (%.1f, %.1f, %.1f) mm", k[0].get<double>(),
+                      k[1].get<double>(), k[2].get<double>());
+        o << buf;
+      }
+      o << "\n";
     }
   }
   if (s.contains("hand")) {

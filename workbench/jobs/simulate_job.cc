@@ -64,6 +64,7 @@ SimulateOptions ToSimulateOptions(const SimulateJobOptions& options) {
   o.rate_hz = options.rate_hz;
   o.write_clean = options.clean;
   o.sentences = options.texts;
+  o.layout = options.layout;
   return o;
 }
 

@@ -29,6 +29,8 @@ struct SimulateJobOptions {
   bool label_swaps = false;
   double rate_hz = 120.0;
   bool clean = false;  // also write <take>.clean.c3d without artefacts
+  // Marker layout: "default" or "lab2" (datasets/virtual_cuer.h, SimulateOptions::layout).
+  std::string layout = "default";
   // Phasing-model JSON (synth/phasing.h LoadPhasingModel) for the gesture
   // times; "" = the defaults. Read by Simulate (a bad file: ParseError naming it).
   std::string phasing_file;

@@ -97,6 +97,8 @@ FaceModel MakeFace() {
   m.head_weights[6] = 0.25;
   m.rest_pose.rotation = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   m.rest_pose.translation = Eigen::Vector3d(12.5, -300.25, 1400.125);
+  m.rotation_offsets = Eigen::MatrixXd::Zero(s, 3);
+  m.rotation_offsets.row(5) << -3.125, 40.5, 71.0625;  // the fitted throat marker's
   m.shape.mean = FilledVector(20, 3 * s);
   m.shape.steps = {{"jaw", {0}, 1}, {"lips", {1, 2, 3, 4}, 2}, {"throat", {5, 6}, 1}, {"residual", {}, 2}};
   m.shape.loadings = Filled(21, 3 * s, 6);
@@ -325,6 +327,7 @@ TEST(ModelFile, EmptyListsAndLargeTextRoundTrip) {
   f.face->layout.throat_weights.clear();
   const int s = f.face->layout.num_shape_markers();  // 5
   f.face->head_weights = Eigen::VectorXd::Ones(s);
+  f.face->rotation_offsets.resize(0, 0);  // as in files written before the throat rotation offsets
   f.face->shape.mean = FilledVector(50, 3 * s);
   f.face->shape.steps = {{"all", {}, 2}};
   f.face->shape.loadings = Filled(51, 3 * s, 2);

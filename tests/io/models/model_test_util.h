@@ -60,6 +60,7 @@ inline void ExpectSameFace(const FaceModel& a, const FaceModel& b) {
   ExpectSameMatrix(a.head_weights, b.head_weights, "face.head_weights");
   ExpectSameMatrix(a.rest_pose.rotation, b.rest_pose.rotation, "face.rest_pose.rotation");
   ExpectSameMatrix(a.rest_pose.translation, b.rest_pose.translation, "face.rest_pose.translation");
+  ExpectSameMatrix(a.rotation_offsets, b.rotation_offsets, "face.rotation_offsets");
   ExpectSameMatrix(a.shape.mean, b.shape.mean, "face.shape.mean");
   ExpectSameMatrix(a.shape.loadings, b.shape.loadings, "face.shape.loadings");
   EXPECT_EQ(a.shape.parameter_names, b.shape.parameter_names);
