@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <optional>
 #include <sstream>
 
@@ -12,6 +13,7 @@
 #include "core/markerset.h"
 #include "io/corpus/corpus.h"
 #include "io/models/model_file.h"
+#include "workbench/jobs/figures.h"
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/take_data.h"
 #include "workbench/jobs/take_selection.h"
@@ -103,6 +105,26 @@ LabelTier IntervalTier(const std::string& name, double end_s) {
   LabelTier t = PointTier(name, end_s);
   t.kind = LabelTier::Kind::kInterval;
   return t;
+}
+
+// A posterior matrix as a corpus score matrix, columns named by class.
+ScoreMatrix ScoreMatrixOf(const std::string& name, const Eigen::MatrixXd& p) {
+  ScoreMatrix m;
+  m.name = name;
+  m.rows = p.rows();
+  m.cols = p.cols();
+  m.values.resize(static_cast<size_t>(p.size()));
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(m.values.data(), p.rows(),
+                                                                                     p.cols()) = p;
+  for (Eigen::Index c = 0; c < p.cols(); ++c) m.column_names.push_back(std::to_string(c));
+  return m;
+}
+
+std::vector<std::vector<int>> Counts(const Confusion& c) {
+  std::vector<std::vector<int>> out(static_cast<size_t>(c.counts.rows()));
+  for (Eigen::Index i = 0; i < c.counts.rows(); ++i)
+    for (Eigen::Index j = 0; j < c.counts.cols(); ++j) out[i].push_back(static_cast<int>(c.counts(i, j)));
+  return out;
 }
 
 std::string Fixed(double v, int digits) {
@@ -233,6 +255,10 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
   const std::vector<TakeRange> ranges = SelectCorpusTakes(corpus, options.takes);
   std::optional<MarkerSet> given;
   if (!options.markerset.empty()) given = LoadMarkerSet(options.markerset);
+  if (!options.figures.empty()) {
+    figures::Require();
+    std::filesystem::create_directories(options.figures);
+  }
 
   json result = {{"corpus", options.corpus}, {"keys", options.keys}, {"takes", json::array()}};
   Confusion shape(kNumShapes), placement(kNumPlacements);
@@ -241,6 +267,7 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
   std::vector<double> errors_ms;
   bool scored = false;
   std::vector<std::pair<std::string, std::vector<LabelTier>>> writes;
+  std::vector<std::pair<std::string, TakeScores>> score_writes;
   for (size_t i = 0; i < ranges.size(); ++i) {
     const TakeRange& range = ranges[i];
     progress.Update("keys score: " + range.take, static_cast<double>(i) / static_cast<double>(ranges.size()));
@@ -334,14 +361,38 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
       tiers.push_back(std::move(t));
     }
     tj["tiers_written"] = options.dry_run ? json::array() : json(names);
+    tj["scores_written"] = options.dry_run ? json() : json("keys");
     writes.push_back({range.take, std::move(tiers)});
+    TakeScores scores;
+    scores.name = "keys";
+    scores.rate_hz = rate;
+    scores.start_s = 0.0;
+    scores.source = options.keys;
+    scores.matrices = {ScoreMatrixOf("shape", post.shape), ScoreMatrixOf("placement", post.placement)};
+    score_writes.push_back({range.take, std::move(scores)});
     result["takes"].push_back(std::move(tj));
   }
   if (!options.dry_run && !writes.empty()) {
     progress.Update("keys score: writing tiers", 0.0);
     CorpusTransaction tx(options.corpus);
     for (const auto& [take, tiers] : writes) tx.WriteTiers(take, tiers);
+    for (const auto& [take, scores] : score_writes) tx.WriteScores(take, scores);
     tx.Commit();
+  }
+  if (scored && !options.figures.empty()) {
+    progress.Update("keys score: figures", 1.0);
+    auto labels = [](int n) {
+      std::vector<std::string> l;
+      for (int i = 0; i < n; ++i) l.push_back(std::to_string(i));
+      return l;
+    };
+    const std::string sp = (std::filesystem::path(options.figures) / "shape_confusion.png").string();
+    const std::string pp = (std::filesystem::path(options.figures) / "placement_confusion.png").string();
+    figures::SaveConfusionMatrix(sp, "Hand shapes at the labelled frames", labels(kNumShapes), Counts(shape),
+                                 "labelled shape", "posterior argmax");
+    figures::SaveConfusionMatrix(pp, "Placements at the labelled frames", labels(kNumPlacements), Counts(placement),
+                                 "labelled placement", "posterior argmax");
+    result["figures"] = {sp, pp};
   }
   if (scored) {
     double mean = 0, sd = 0;
@@ -392,6 +443,8 @@ std::string KeysScoreText(const json& r) {
       << " keys within 40 ms; target error " << Fixed(a["target_error_ms"]["mean"].get<double>(), 1) << " ms (sd "
       << Fixed(a["target_error_ms"]["sd"].get<double>(), 1) << ")\n";
   }
+  if (r.contains("figures"))
+    for (const json& f : r["figures"]) o << "figure: " << f.get<std::string>() << "\n";
   return o.str();
 }
 
