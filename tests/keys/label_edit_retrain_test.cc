@@ -44,7 +44,7 @@ double TimeOf(int frame) { return frame / kRateHz; }
 
 // Retrains on the model's tier and scores every frame.
 KeyPosteriors Retrain(const LabelModel& labels, const HandFeatures& features, KeyModel* model_out = nullptr) {
-  const KeyLabels l = LabelsFromTiers(labels.tier(), nullptr, kRateHz, kFrames, "synthetic");
+  const KeyLabels l = LabelsFromTargets(ReadKeyTargets({labels.tier()}, "synthetic"), kRateHz, kFrames, "synthetic");
   KeyModelOptions options;
   KeyTrainingSet set;
   set.Add(features, l, options);

@@ -18,6 +18,7 @@
 #include "analysis/keys/key_decoding.h"
 #include "analysis/keys/key_model.h"
 #include "core/error.h"
+#include "core/labels.h"
 #include "datasets/virtual_cuer.h"
 #include "models/gaussian_fill.h"
 #include "models/rigid_motion.h"
@@ -25,12 +26,6 @@
 
 namespace csw::keys {
 namespace {
-
-const LabelTier* FindTier(const Take& take, const std::string& name) {
-  for (const auto& t : take.tiers)
-    if (t.name == name) return &t;
-  return nullptr;
-}
 
 SimulateOptions Defaults() {
   SimulateOptions o;
@@ -330,11 +325,9 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
     cleaning::FillGaps(s.r.take.markers, {&spline, &dct}, static_cast<int64_t>(0.5 * s.r.take.rate_hz), &filled);
     s.features[0] = ComputeHandFeatures(filled, binding, layout, head);
     s.features[1] = ComputeHandFeatures(s.r.clean, binding, layout, head);
-    const LabelTier* keys = FindTier(s.r.take, "keys");
-    const LabelTier* places = FindTier(s.r.take, "placement_targets");
-    ASSERT_NE(keys, nullptr);
-    ASSERT_NE(places, nullptr);
-    s.labels = LabelsFromTiers(*keys, places, s.r.take.rate_hz, s.r.take.frames(), s.r.take.name);
+    const KeyTargets targets = ReadKeyTargets(s.r.take, s.r.take.name);
+    ASSERT_TRUE(targets.placement_from_own_tier);
+    s.labels = LabelsFromTargets(targets, s.r.take.rate_hz, s.r.take.frames(), s.r.take.name);
     takes.push_back(std::move(s));
   }
   const int train = sentences / 3;

@@ -12,6 +12,7 @@
 #include "datasets/virtual_cuer.h"
 #include "io/corpus/corpus.h"
 #include "io/models/model_file.h"
+#include "tests/keys_job/cuer_corpus.h"
 #include "tests/testing/testing.h"
 #include "workbench/jobs/job_util.h"
 
@@ -65,28 +66,10 @@ TEST(KeysText, RendersTheScoreReport) {
             "aligned decoding: 7 of 10 keys within 40 ms; target error 31.2 ms (sd 12.5)\n");
 }
 
-// Six virtual-cuer sentences (no occlusions, so every feature is observed) in
-// a corpus that remembers the marker set.
-struct Fixture {
-  testing::TempDir dir;
-  std::string corpus, keys;
-  Fixture() {
-    corpus = (dir / "c.h5").string();
-    keys = (dir / "keys.h5").string();
-    SimulateOptions o;
-    o.audio = false;
-    o.occlusions = false;
-    const VirtualCuer cuer(o);
-    const std::string set = MarkerSetToJson(cuer.MakeMarkerSet());
-    const auto texts = ShippedSentences();
-    CorpusTransaction tx(corpus);
-    for (int i = 0; i < 6; ++i) {
-      Take t = cuer.SimulateSentence("s" + std::to_string(i), texts[static_cast<size_t>(i)]).take;
-      t.markerset_json = set;
-      tx.WriteTake(t);
-    }
-    tx.Commit();
-  }
+// Six virtual-cuer sentences (no occlusions, so every feature is observed):
+// four to train on, two to score.
+struct Fixture : testing::CuerCorpus {
+  Fixture() : CuerCorpus(6) {}
 };
 
 TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
@@ -218,7 +201,10 @@ TEST(KeysJob, BadLabelCodesAndMissingKeyModelGiveClearErrors) {
     KeysTrain(t, progress);
     FAIL() << "bad code accepted";
   } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("take 's0': tier keys: label 2"), std::string::npos) << e.what();
+    // One error naming the corpus, the take, the tier, the label and the code (core/labels.h).
+    EXPECT_NE(std::string(e.what()).find(fx.corpus + ": take 's0': tier 'keys': label 2 at "), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("bad key code '9x'"), std::string::npos) << e.what();
   }
   // A model file without /keys.
   SaveModelFile(fx.keys, ModelFile{});

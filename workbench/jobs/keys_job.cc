@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/file_util.h"
 #include "core/json_util.h"
+#include "core/labels.h"
 #include "core/markerset.h"
 #include "io/corpus/corpus.h"
 #include "io/models/model_file.h"
@@ -17,6 +18,7 @@
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/take_data.h"
 #include "workbench/jobs/take_selection.h"
+#include "workbench/jobs/tier_util.h"
 
 #ifndef CSW_VERSION
 #define CSW_VERSION "unknown"
@@ -28,12 +30,6 @@ using nlohmann::json;
 using namespace csw::keys;
 
 namespace {
-
-const LabelTier* FindTier(const Take& take, const std::string& name) {
-  for (const auto& t : take.tiers)
-    if (t.name == name) return &t;
-  return nullptr;
-}
 
 // The marker set for a take: given, or remembered by the corpus; nullopt when neither.
 std::optional<MarkerSet> TakeSet(const Corpus& corpus, const std::string& take, const std::optional<MarkerSet>& given,
@@ -198,18 +194,17 @@ json KeysTrain(const KeysTrainOptions& options, Progress& progress) {
       if (layout->head.empty()) layout->head = ms->head_cluster;
     }
     if (head.cols() == 0) head = HeadReference(take.markers, binding, *layout);
-    const LabelTier* tier = FindTier(take, options.tier);
-    if (tier == nullptr) throw InvalidInput(where + ": no label tier '" + options.tier + "'");
-    const LabelTier* ptier = FindTier(take, options.placement_tier);
+    const KeyTargets targets = ReadKeyTargets(take, where, {options.tier, options.placement_tier});
     const KeyLabels labels =
-        InRange(LabelsFromTiers(*tier, ptier, take.rate_hz, take.frames(), where), range.first, range.count);
+        InRange(LabelsFromTargets(targets, take.rate_hz, take.frames(), where), range.first, range.count);
     const HandFeatures features = ComputeHandFeatures(take.markers, binding, *layout, head);
     set.Add(features, labels, options.model);
     specs.push_back(range.spec);
-    result["takes"].push_back({{"take", range.spec},
-                               {"shape_targets", labels.shape_frames.size()},
-                               {"placement_targets", labels.placement_frames.size()},
-                               {"placement_tier", ptier != nullptr ? options.placement_tier : options.tier}});
+    result["takes"].push_back(
+        {{"take", range.spec},
+         {"shape_targets", labels.shape_frames.size()},
+         {"placement_targets", labels.placement_frames.size()},
+         {"placement_tier", targets.placement_from_own_tier ? options.placement_tier : options.tier}});
   }
   progress.Update("keys train: fit", 1.0);
   KeyModel model = TrainKeyModel(set, *layout, head, options.model);
@@ -301,20 +296,19 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
     new_tiers.push_back(extents_tier("shape_extents", post.shape));
     new_tiers.push_back(extents_tier("placement_extents", post.placement));
 
-    if (const LabelTier* tier = FindTier(take, options.tier); tier != nullptr && !tier->labels.empty()) {
+    if (const LabelTier* tier = FindTier(take.tiers, options.tier); tier != nullptr && !tier->labels.empty()) {
       scored = true;
-      const KeyLabels labels =
-          LabelsFromTiers(*tier, FindTier(take, options.placement_tier), rate, take.frames(), where);
+      const KeyTargets targets = ReadKeyTargets(take, where, {options.tier, options.placement_tier});
+      const KeyLabels labels = LabelsFromTargets(targets, rate, take.frames(), where);
       Confusion ts(kNumShapes), tp(kNumPlacements);
       std::vector<std::string> expected;
-      std::vector<ExpectedKey> expected_keys;
+      std::vector<keys::ExpectedKey> expected_keys;
       for (size_t k = 0; k < labels.shape_frames.size(); ++k) {
         ts.Add(labels.shapes[k], ArgMax(post.shape, labels.shape_frames[k]));
         // The expected sequence: the label tier's codes in time order.
-        int p = 0, sh = 0;
-        ParseKeyCode(tier->labels[k].text, &p, &sh);
-        expected.push_back(KeyCode(p, sh));
-        expected_keys.push_back({p, sh});
+        const ::csw::KeyCode& code = targets.shape[k].code;
+        expected.push_back(code.Text());
+        expected_keys.push_back({code.placement, code.shape});
       }
       for (size_t k = 0; k < labels.placement_frames.size(); ++k)
         tp.Add(labels.placements[k], ArgMax(post.placement, labels.placement_frames[k]));
