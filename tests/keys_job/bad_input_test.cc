@@ -85,6 +85,11 @@ TEST(BadInput, DamagedLayoutFileNamesTheFileAndThePlace) {
   std::ofstream(t.layout) << "{\n  \"hand_layout\": {\n    \"palm\": [\"P1\", \"P2\",\n";
   std::string m = ErrorOf<ParseError>([&] { KeysTrain(t, fx.progress); });
   EXPECT_NE(m.find(t.layout + ": line 4: invalid JSON"), std::string::npos) << m;
+  // A number too large for a double (found by fuzz/hand_layout_fuzz.cc):
+  // the same one error, with the line.
+  std::ofstream(t.layout) << "{\"hand_layout\": {\n  \"palm\": [1e999]}}";
+  m = ErrorOf<ParseError>([&] { KeysTrain(t, fx.progress); });
+  EXPECT_NE(m.find(t.layout + ": line 2: invalid JSON: number overflow"), std::string::npos) << m;
   // JSON without the section.
   std::ofstream(t.layout) << "{\"layout\": {}}";
   m = ErrorOf<UsageError>([&] { KeysTrain(t, fx.progress); });
