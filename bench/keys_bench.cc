@@ -7,11 +7,24 @@
 //     (marginalised: sub-covariance factorised per frame);
 //   BM_ScoreFrames: the whole ScoreFrames (shape posteriors, placement feature
 //     chosen by the most probable shape, placement posteriors, closeness).
+// End to end on the embedded demo corpus (datasets/demo/sentences: 20 cued
+// sentences, 113 markers, imported once into a temporary corpus; the key model
+// trained on its first 7 sentences' label tiers):
+//   BM_KeysScoreDemo/dry: `csw keys score` on the 20 sentences, report only
+//     (read takes, hand features, posteriors, decodings, accuracies);
+//   BM_KeysScoreDemo/write: the same writing the tiers and the posterior
+//     score sets into the corpus (one transaction per run).
 #include <benchmark/benchmark.h>
+#include <unistd.h>
 
+#include <filesystem>
 #include <random>
 
 #include "analysis/keys/key_model.h"
+#include "core/progress.h"
+#include "io/corpus/corpus.h"
+#include "workbench/jobs/import_job.h"
+#include "workbench/jobs/keys_job.h"
 
 namespace csw::keys {
 namespace {
@@ -92,9 +105,56 @@ void BM_ScoreFrames(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.iterations() * kFrames), benchmark::Counter::kIsRate);
 }
 
+// The demo sentences imported into a temporary corpus, and a key model.
+struct Demo {
+  std::filesystem::path dir;
+  std::string corpus, keys;
+  int64_t frames = 0;
+  Demo() {
+    dir = std::filesystem::temp_directory_path() / ("csw-keys-bench-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    corpus = (dir / "demo.h5").string();
+    keys = (dir / "keys.h5").string();
+    const std::filesystem::path src = std::filesystem::path(CSW_SOURCE_DIR) / "datasets/demo/sentences";
+    Progress progress;
+    jobs::ImportOptions io;
+    for (const auto& e : std::filesystem::directory_iterator(src)) {
+      const std::string ext = e.path().extension().string();
+      if (ext == ".c3d" || ext == ".TextGrid") io.files.push_back(e.path().string());
+    }
+    io.corpus = corpus;
+    io.markerset = (src / "markerset.json").string();
+    frames = jobs::Import(io, progress).frames;
+    jobs::KeysTrainOptions t;
+    t.corpus = corpus;
+    t.takes = {"sentence_00[1-7]"};
+    t.output = keys;
+    jobs::KeysTrain(t, progress);
+  }
+  ~Demo() {
+    std::error_code ec;
+    std::filesystem::remove_all(dir, ec);
+  }
+};
+
+void BM_KeysScoreDemo(benchmark::State& state) {
+  static const Demo demo;
+  jobs::KeysScoreOptions o;
+  o.corpus = demo.corpus;
+  o.keys = demo.keys;
+  o.dry_run = state.range(0) == 0;
+  Progress progress;
+  for (auto _ : state) benchmark::DoNotOptimize(jobs::KeysScore(o, progress));
+  state.SetLabel(o.dry_run ? "dry-run" : "writes tiers and scores");
+  state.counters["frames"] = static_cast<double>(demo.frames);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations() * demo.frames), benchmark::Counter::kIsRate);
+}
+
 BENCHMARK(BM_KeyPosteriorsComplete)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_KeyPosteriorsOneMissing)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ScoreFrames)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KeysScoreDemo)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace csw::keys

@@ -66,8 +66,10 @@ constexpr std::string_view kIpaStrip[] = {"ː",      "ˑ",      "ˈ",      "ˌ",
                                           "\u032A", "\u0325", "\u030A", "\u0329", "\u0361", "\u035C", ".",
                                           "(",      ")",      "[",      "]",      "/",      ":"};
 constexpr std::string_view kSampaStrip[] = {"\"", "%", ":", ".", "(", ")", "[", "]", "'"};
-// Liaison marks: alone, they stand for nothing.
-constexpr std::string_view kLiaison[] = {"‿", "-\\"};
+// Liaison marks, and espeak-ng's linking glide ";" (synth/phonetics.h
+// IsEspeakLinking; phone tiers written from espeak-ng before it was dropped
+// carry it): alone, they stand for nothing.
+constexpr std::string_view kLiaison[] = {"‿", "-\\", ";"};
 
 void EraseAll(std::string* s, std::string_view what) {
   for (size_t at = s->find(what); at != std::string::npos; at = s->find(what)) s->erase(at, what.size());

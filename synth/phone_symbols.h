@@ -15,6 +15,8 @@
 //     likewise share it;
 //   - a liaison mark alone ("‿", "-\") -> nothing (the liaison consonant itself is
 //     a normal consonant and takes the next vowel, as in "les amis" l e z a m i);
+//     likewise espeak-ng's linking glide ";" (synth/phonetics.h IsEspeakLinking),
+//     whose interval goes to the phone before it;
 //   - a sound LfPC does not cue ([h], [ʔ]) -> an uncued phone, transparent to
 //     the rules, no warning;
 //   - an unknown symbol -> an uncued phone (ipa "?" + the symbol) and one warning per

@@ -278,6 +278,8 @@ std::vector<std::pair<std::string, std::string>> EspeakIpaTable() {
 
 bool IsEspeakPause(const std::string& espeak_name) { return !espeak_name.empty() && espeak_name[0] == '_'; }
 
+bool IsEspeakLinking(const std::string& espeak_name) { return espeak_name == ";"; }
+
 std::string EspeakToIpa(const std::string& espeak_name) {
   if (IsEspeakPause(espeak_name)) return "";
   const EspeakEntry* e = FindEntry(espeak_name);
@@ -373,6 +375,16 @@ Utterance Phonetise(const std::string& text, const PhonetiseOptions& options) {
     const int64_t end = i + 1 < segs.size() ? std::max(g.start, segs[i + 1].start) : total;
     if (IsEspeakPause(g.name)) {
       add_phone("", g.name, g.start, end, -1);
+      continue;
+    }
+    if (IsEspeakLinking(g.name)) {  // not a phoneme: its time goes to the phone before
+      if (u.phones.empty()) {
+        add_phone("", g.name, g.start, end, -1);
+      } else if (end > g.start) {
+        Phone& last = u.phones.back();
+        last.end_s = end / rate;
+        if (last.word >= 0) u.words[last.word].end_s = last.end_s;
+      }
       continue;
     }
     std::vector<std::string> ipa = EspeakToIpaPhones(g.name);

@@ -60,6 +60,12 @@ std::vector<std::string> EspeakToIpaPhones(const std::string& espeak_name);
 std::vector<std::pair<std::string, std::string>> EspeakIpaTable();
 // espeak-ng's pause phonemes ("_", "_:", "_!", "_|", ...).
 bool IsEspeakPause(const std::string& espeak_name);
+// espeak-ng's linking phoneme ";" (phsource/phonemes: "linking j ... used
+// between (i) vowels and a following vowel"; in French it appears between a
+// word-final [i] and a vowel-initial word: "bougie ; éclaire", "il y ; a"): a
+// transitional glide, not a phoneme of the words, so not cued. Phonetise
+// drops it and gives its time to the phone before it.
+bool IsEspeakLinking(const std::string& espeak_name);
 
 // The one place where espeak-ng's output is corrected towards the phonemes
 // actually spoken (docs/phonetics.md, "Exceptions"): espeak-ng writes the

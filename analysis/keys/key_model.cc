@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/error.h"
+#include "core/labels.h"
 
 namespace csw::keys {
 namespace {
@@ -260,51 +261,23 @@ Eigen::MatrixXd GaussianClassifier::Posteriors(const Eigen::MatrixXd& features) 
   return out;
 }
 
-bool ParseKeyCode(const std::string& text, int* placement, int* shape) {
-  std::string s = text;
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.pop_back();
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.erase(s.begin());
-  if (s.size() != 2 || !std::isdigit(static_cast<unsigned char>(s[0])) ||
-      !std::isdigit(static_cast<unsigned char>(s[1])))
-    return false;
-  const int p = s[0] - '0', h = s[1] - '0';
-  if (p >= kNumPlacements || h >= kNumShapes) return false;
-  *placement = p;
-  *shape = h;
-  return true;
-}
+std::string KeyCode(int placement, int shape) { return ::csw::KeyCode{placement, shape}.Text(); }
 
-std::string KeyCode(int placement, int shape) { return std::to_string(placement) + std::to_string(shape); }
-
-KeyLabels LabelsFromTiers(const LabelTier& shape_tier, const LabelTier* placement_tier, double rate_hz, int64_t frames,
-                          const std::string& where) {
+KeyLabels LabelsFromTargets(const KeyTargets& targets, double rate_hz, int64_t frames, const std::string& where) {
   if (!(rate_hz > 0)) throw InvalidInput(where + ": frame rate must be > 0");
   auto frame_of = [&](double t) {
     return std::clamp<int64_t>(static_cast<int64_t>(std::llround(t * rate_hz)), 0, std::max<int64_t>(frames - 1, 0));
   };
-  auto read = [&](const LabelTier& tier, bool for_shape, KeyLabels* out) {
-    for (size_t i = 0; i < tier.labels.size(); ++i) {
-      const auto& l = tier.labels[i];
-      int p = 0, s = 0;
-      if (!ParseKeyCode(l.text, &p, &s))
-        throw InvalidInput(where + ": tier " + tier.name + ": label " + std::to_string(i + 1) + " at " +
-                           std::to_string(l.start_s) + " s: bad key code \"" + l.text +
-                           "\" (two digits PS: placement 0-5, shape 0-8)");
-      const int64_t f = frame_of(0.5 * (l.start_s + l.end_s));
-      if (for_shape) {
-        out->shape_frames.push_back(f);
-        out->shapes.push_back(s);
-      }
-      if (!for_shape || placement_tier == nullptr) {
-        out->placement_frames.push_back(f);
-        out->placements.push_back(p);
-        out->placement_shapes.push_back(s);
-      }
-    }
-  };
   KeyLabels labels;
-  read(shape_tier, true, &labels);
-  if (placement_tier != nullptr) read(*placement_tier, false, &labels);
+  for (const ComponentTarget& t : targets.shape) {
+    labels.shape_frames.push_back(frame_of(t.time_s));
+    labels.shapes.push_back(t.value);
+  }
+  for (const ComponentTarget& t : targets.placement) {
+    labels.placement_frames.push_back(frame_of(t.time_s));
+    labels.placements.push_back(t.value);
+    labels.placement_shapes.push_back(t.code.shape);
+  }
   return labels;
 }
 

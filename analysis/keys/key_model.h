@@ -25,6 +25,10 @@
 #include "core/take.h"
 #include "models/rigid_model.h"
 
+namespace csw {
+struct KeyTargets;  // core/labels.h
+}  // namespace csw
+
 namespace csw::keys {
 
 inline constexpr int kNumShapes = 9;      // 0 = rest, 1-8
@@ -101,8 +105,7 @@ class GaussianClassifier {
   std::vector<double> fast_mean_, fast_inv_, fast_const_;
 };
 
-// A key code "PS": placement 0-5, shape 0-8. Returns false when malformed.
-bool ParseKeyCode(const std::string& text, int* placement, int* shape);
+// A key code "PS" (core/labels.h KeyCode::Text).
 std::string KeyCode(int placement, int shape);
 
 // Labelled target frames of one take.
@@ -114,12 +117,11 @@ struct KeyLabels {
   std::vector<int> placement_shapes;  // the shape of the key each placement target belongs to
 };
 
-// From the point tier of shape targets (codes "PS") and, when given, a second
-// point tier of placement targets (else the placement targets are the same
-// points). Frame = round(time × rate_hz), kept inside the take. Throws
-// InvalidInput naming `where`, the tier and the label for a bad code.
-KeyLabels LabelsFromTiers(const LabelTier& shape_tier, const LabelTier* placement_tier, double rate_hz, int64_t frames,
-                          const std::string& where);
+// The target frames of the targets read from the label tiers
+// (core/labels.h ReadKeyTargets, which parses and checks the key codes):
+// frame = round(time × rate_hz), kept inside the take. Throws InvalidInput
+// naming `where` when rate_hz is not > 0.
+KeyLabels LabelsFromTargets(const KeyTargets& targets, double rate_hz, int64_t frames, const std::string& where);
 
 struct KeyModelOptions {
   GaussianOptions shape;

@@ -534,6 +534,73 @@ std::vector<LabelTier> ReadTiers(hid_t take_group, const Where& where, const std
   return tiers;
 }
 
+bool BadScoreName(const std::string& n) {
+  return n.empty() || n == "." || n == ".." || n.find('/') != std::string::npos;
+}
+
+// The set as the group `name` of the scores group `sg` (replacing one of that name).
+void WriteScoreSet(hid_t sg, const TakeScores& s, const Where& where, const std::string& obj) {
+  const std::string o = obj + "/scores/" + s.name;
+  DeleteLinkIfExists(sg, s.name, where, o);
+  Handle g = h5::CreateGroup(sg, s.name, where, o);
+  h5::WriteAttr(g.get(), "rate_hz", s.rate_hz, where, o);
+  h5::WriteAttr(g.get(), "start_s", s.start_s, where, o);
+  h5::WriteAttr(g.get(), "source", s.source, where, o);
+  for (const ScoreMatrix& m : s.matrices) {
+    const std::string mo = o + "/" + m.name;
+    hsize_t dims[2] = {static_cast<hsize_t>(m.rows), static_cast<hsize_t>(m.cols)};
+    Handle space = h5::Own(H5Screate_simple(2, dims, nullptr), H5Sclose, where, "cannot create", mo);
+    Handle dcpl = h5::Own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, where, "cannot create", mo);
+    if (m.rows > 0 && m.cols > 0) {  // chunks of up to 1024 rows, shuffle + deflate
+      hsize_t chunk[2] = {static_cast<hsize_t>(std::min<int64_t>(m.rows, 1024)), static_cast<hsize_t>(m.cols)};
+      h5::Check(H5Pset_chunk(dcpl.get(), 2, chunk), where, "cannot chunk", mo);
+      h5::Check(H5Pset_shuffle(dcpl.get()), where, "cannot set the shuffle filter of", mo);
+      h5::Check(H5Pset_deflate(dcpl.get(), kCorpusDeflateLevel), where, "cannot set the deflate filter of", mo);
+    }
+    Handle ds =
+        h5::Own(H5Dcreate2(g.get(), m.name.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                H5Dclose, where, "cannot create", mo);
+    if (!m.values.empty())
+      h5::Check(H5Dwrite(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, m.values.data()), where,
+                "cannot write", mo);
+    h5::WriteAttr(ds.get(), "column_names", m.column_names, where, mo);
+  }
+}
+
+TakeScores ReadScoreSet(hid_t sg, const std::string& name, const Where& where, const std::string& obj) {
+  const std::string o = obj + "/scores/" + name;
+  Handle g = h5::OpenGroup(sg, name, where, o);
+  TakeScores s;
+  s.name = name;
+  s.rate_hz = h5::ReadAttrDouble(g.get(), "rate_hz", where, o).value_or(0.0);
+  s.start_s = h5::ReadAttrDouble(g.get(), "start_s", where, o).value_or(0.0);
+  s.source = h5::ReadAttrString(g.get(), "source", where, o).value_or("");
+  if (!(s.rate_hz > 0) || !std::isfinite(s.rate_hz) || !std::isfinite(s.start_s))
+    throw Damaged(where, o + ": rate_hz must be a positive number and start_s finite");
+  for (const std::string& mname : h5::LinkNames(g.get(), where, o)) {
+    const std::string mo = o + "/" + mname;
+    Handle ds = h5::OpenDataset(g.get(), mname, where, mo);
+    const std::vector<hsize_t> dims = h5::Shape(ds.get(), where, mo);
+    if (dims.size() != 2) throw Damaged(where, mo + " has rank " + std::to_string(dims.size()) + ", expected 2");
+    if (dims[1] > 0 && dims[0] > static_cast<hsize_t>(kMaxLoadFloats) / dims[1])
+      throw Damaged(where, mo + " is implausibly large");
+    ScoreMatrix m;
+    m.name = mname;
+    m.rows = static_cast<int64_t>(dims[0]);
+    m.cols = static_cast<int64_t>(dims[1]);
+    m.values.resize(dims[0] * dims[1]);
+    if (!m.values.empty())
+      h5::Check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, m.values.data()), where,
+                "cannot read", mo);
+    m.column_names = h5::ReadAttrStrings(ds.get(), "column_names", where, mo);
+    if (!m.column_names.empty() && static_cast<int64_t>(m.column_names.size()) != m.cols)
+      throw Damaged(where, mo + ": " + std::to_string(m.column_names.size()) + " column names for " +
+                               std::to_string(m.cols) + " columns");
+    s.matrices.push_back(std::move(m));
+  }
+  return s;
+}
+
 struct MarkerShape {
   int64_t frames = 0;
   int64_t markers = 0;
@@ -914,6 +981,24 @@ std::string Corpus::TakeMarkerSet(const std::string& take) const {
   return h5::ReadAttrString(g.get(), "markerset", impl_->where, TakeObject(take)).value_or("");
 }
 
+std::vector<std::string> Corpus::ScoreNames(const std::string& take) const {
+  auto lock = h5::Lock();
+  Handle g = OpenTakeGroup(impl_->file.get(), take, impl_->where);
+  if (!h5::LinkExists(g.get(), "scores")) return {};
+  const std::string o = TakeObject(take) + "/scores";
+  Handle sg = h5::OpenGroup(g.get(), "scores", impl_->where, o);
+  return h5::LinkNames(sg.get(), impl_->where, o);
+}
+
+std::optional<TakeScores> Corpus::LoadScores(const std::string& take, const std::string& name) const {
+  auto lock = h5::Lock();
+  Handle g = OpenTakeGroup(impl_->file.get(), take, impl_->where);
+  if (BadScoreName(name) || !h5::LinkExists(g.get(), "scores")) return std::nullopt;
+  Handle sg = h5::OpenGroup(g.get(), "scores", impl_->where, TakeObject(take) + "/scores");
+  if (!h5::LinkExists(sg.get(), name)) return std::nullopt;
+  return ReadScoreSet(sg.get(), name, impl_->where, TakeObject(take));
+}
+
 int Corpus::format_version() const { return impl_->version; }
 
 MarkerArray Corpus::LoadMarkers(const std::string& take, int64_t first, int64_t count) const {
@@ -956,7 +1041,8 @@ struct TakeEntry {
   std::string data_file;
   std::vector<std::string> data_members;  // links into data_file: markers, marker_names, analog, events, provenance
   std::string tiers_file;
-  std::string audio_file;  // empty: no audio group
+  std::string audio_file;   // empty: no audio group
+  std::string scores_file;  // empty: no scores group
   bool writing = false;
 };
 
@@ -1060,6 +1146,7 @@ struct CorpusTransaction::Impl {
     Discard(e.data_file);
     Discard(e.tiers_file);
     Discard(e.audio_file);
+    Discard(e.scores_file);
   }
 
   std::string WriteTiersFile(const std::string& take, const std::vector<LabelTier>& tiers) {
@@ -1082,7 +1169,7 @@ struct CorpusTransaction::Impl {
   std::set<std::string> Referenced() const {
     std::set<std::string> out;
     for (const auto& [name, e] : takes) {
-      for (const std::string* f : {&e.data_file, &e.tiers_file, &e.audio_file}) {
+      for (const std::string* f : {&e.data_file, &e.tiers_file, &e.audio_file, &e.scores_file}) {
         if (!f->empty()) out.insert(*f);
       }
     }
@@ -1132,6 +1219,11 @@ void CorpusTransaction::Impl::Extract(hid_t file, hid_t takes_group, const std::
     h5::CopyTree(g.get(), "audio", f.get(), where, obj + "/audio");
     Close(&f, path, e->audio_file);
   }
+  if (h5::LinkExists(g.get(), "scores")) {
+    Handle f = NewFile(name, ".scores.h5", "csw-take-scores", &e->scores_file);
+    h5::CopyTree(g.get(), "scores", f.get(), where, obj + "/scores");
+    Close(&f, path, e->scores_file);
+  }
 }
 
 void CorpusTransaction::Impl::Load(Progress* progress) {
@@ -1171,6 +1263,11 @@ void CorpusTransaction::Impl::Load(Progress* progress) {
       audio = LinkTargetOf(g.get(), "audio");
       linked = linked && audio.external && audio.object == "/audio";
     }
+    LinkTarget scores;
+    if (h5::LinkExists(g.get(), "scores")) {
+      scores = LinkTargetOf(g.get(), "scores");
+      linked = linked && scores.external && scores.object == "/scores";
+    }
     if (linked) {
       TakeSummary s = SummarizeTake(file.get(), name, where);
       e.frames = s.frames;
@@ -1182,6 +1279,7 @@ void CorpusTransaction::Impl::Load(Progress* progress) {
       e.data_file = markers.file;
       e.tiers_file = tiers.file;
       e.audio_file = audio.file;
+      e.scores_file = scores.file;
     } else {
       e.data_members.clear();
       Extract(file.get(), tg.get(), name, &e);
@@ -1214,6 +1312,7 @@ void CorpusTransaction::Impl::WriteIndex() {
     for (const std::string& member : e.data_members) link(e.data_file, member);
     link(e.tiers_file, "tiers");
     if (!e.audio_file.empty()) link(e.audio_file, "audio");
+    if (!e.scores_file.empty()) link(e.scores_file, "scores");
   }
   Handle old;
   if (copy_reserved) old = OpenHdf5(path, H5F_ACC_RDONLY, where);
@@ -1325,6 +1424,49 @@ void CorpusTransaction::WriteTiers(const std::string& take, const std::vector<La
   e.tiers_file = rel;
   e.tier_names.clear();
   for (const LabelTier& t : tiers) e.tier_names.push_back(t.name);
+}
+
+std::string ScoresProblem(const TakeScores& s) {
+  if (BadScoreName(s.name)) return "score set name '" + s.name + "' must be non-empty, without '/', not . or ..";
+  if (!(s.rate_hz > 0) || !std::isfinite(s.rate_hz)) return "score set '" + s.name + "': rate_hz must be > 0";
+  if (!std::isfinite(s.start_s)) return "score set '" + s.name + "': start_s must be finite";
+  std::set<std::string> seen;
+  for (const ScoreMatrix& m : s.matrices) {
+    const std::string w = "score set '" + s.name + "': matrix '" + m.name + "'";
+    if (BadScoreName(m.name)) return w + ": the name must be non-empty, without '/', not . or ..";
+    if (!seen.insert(m.name).second) return w + " appears twice";
+    if (m.rows < 0 || m.cols < 0 || static_cast<double>(m.values.size()) != static_cast<double>(m.rows) * m.cols)
+      return w + ": " + std::to_string(m.values.size()) + " values for " + std::to_string(m.rows) + " × " +
+             std::to_string(m.cols);
+    if (!m.column_names.empty() && static_cast<int64_t>(m.column_names.size()) != m.cols)
+      return w + ": " + std::to_string(m.column_names.size()) + " column names for " + std::to_string(m.cols) +
+             " columns";
+  }
+  return "";
+}
+
+void CorpusTransaction::WriteScores(const std::string& take, const TakeScores& scores) {
+  if (const std::string why = ScoresProblem(scores); !why.empty())
+    throw InvalidInput(impl_->path + ": take '" + take + "': " + why);
+  auto lock = h5::Lock();
+  impl_->CheckUsable();
+  TakeEntry& e = impl_->Entry(take);
+  const std::string obj = TakeObject(take);
+  std::string rel;
+  Handle f = impl_->NewFile(take, ".scores.h5", "csw-take-scores", &rel);
+  {
+    Handle sg = h5::CreateGroup(f.get(), "scores", impl_->where, obj + "/scores");
+    if (!e.scores_file.empty()) {  // keep the take's other sets
+      Handle old = OpenHdf5(impl_->Abs(e.scores_file), H5F_ACC_RDONLY, impl_->where);
+      Handle og = h5::OpenGroup(old.get(), "scores", impl_->where, obj + "/scores");
+      for (const std::string& n : h5::LinkNames(og.get(), impl_->where, obj + "/scores"))
+        if (n != scores.name) h5::CopyTree(og.get(), n, sg.get(), impl_->where, obj + "/scores/" + n);
+    }
+    WriteScoreSet(sg.get(), scores, impl_->where, obj);
+  }
+  Impl::Close(&f, impl_->path, rel);
+  impl_->Discard(e.scores_file);
+  e.scores_file = rel;
 }
 
 void CorpusTransaction::WriteAudio(const std::string& take, const Audio& audio, const std::string& source_path) {

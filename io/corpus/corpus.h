@@ -17,6 +17,7 @@
 // threads; one object must not be used from two threads at once.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,29 @@ struct TakeSummary {
   bool has_markerset = false;  // the take remembers the marker set it was imported with (Take::markerset_json)
 };
 
+// Per-frame analysis results of a take (docs/corpus-format.md, "scores/"):
+// a named set (e.g. "keys", the gestural score of `csw keys score`) of
+// matrices with one row per frame, sampled at rate_hz from start_s (take
+// time). Set and matrix names are non-empty, without '/', not "." or "..".
+struct ScoreMatrix {
+  std::string name;                       // e.g. "shape"
+  int64_t rows = 0;                       // frames
+  int64_t cols = 0;                       // e.g. classes
+  std::vector<double> values;             // rows × cols, row-major
+  std::vector<std::string> column_names;  // cols names, or empty
+};
+
+struct TakeScores {
+  std::string name;                   // e.g. "keys"
+  double rate_hz = 0.0;               // rows per second (> 0)
+  double start_s = 0.0;               // time of row 0
+  std::string source;                 // what computed them, e.g. the key model file
+  std::vector<ScoreMatrix> matrices;  // read back in name order
+};
+
+// "" or why the set cannot be stored (a name, a size, the rate).
+std::string ScoresProblem(const TakeScores& scores);
+
 // A read-only view of a corpus file. Cheap to copy (copies share the open file).
 class Corpus {
  public:
@@ -66,6 +90,12 @@ class Corpus {
   // The marker-set definition (JSON text) the take was imported with, "" when
   // none. Throws InvalidInput when there is no such take.
   std::string TakeMarkerSet(const std::string& take) const;
+  // Names of the take's score sets (name order); empty when none.
+  std::vector<std::string> ScoreNames(const std::string& take) const;
+  // One score set of a take, nullopt when the take has none of that name.
+  // Throws InvalidInput when there is no such take, ParseError naming the
+  // corpus and the object when the stored set is damaged.
+  std::optional<TakeScores> LoadScores(const std::string& take, const std::string& name) const;
   // 1 (single file), 2 (index + folder, or packed).
   int format_version() const;
   std::string path() const;
@@ -141,6 +171,10 @@ class CorpusTransaction {
   void RemoveTake(const std::string& name);
   // Replaces all label tiers of a take.
   void WriteTiers(const std::string& take, const std::vector<LabelTier>& tiers);
+  // Stores a score set of a take, replacing the set of that name (the take's
+  // other sets are kept). Replacing the take (WriteTake with kReplace) drops
+  // its scores. Throws InvalidInput for a bad set (ScoresProblem) or take.
+  void WriteScores(const std::string& take, const TakeScores& scores);
   // Replaces the audio of a take (an empty audio removes the samples).
   void WriteAudio(const std::string& take, const Audio& audio, const std::string& source_path);
   // Makes every change durable and visible at path(). Throws when a

@@ -934,7 +934,9 @@ keys::GaussianClassifier ReadGaussians(hid_t parent, const std::string& name, co
   try {
     return keys::GaussianClassifier::FromClasses(std::move(classes), labels, features, o);
   } catch (const InvalidInput& e) {
-    c.Fail(object, e.what());
+    // A covariance that is not positive definite: name the dataset (docs/model-format.md).
+    const bool covariance = std::string(e.what()).find("covariance") != std::string::npos;
+    c.Fail(covariance ? object + "/covariances" : object, e.what());
   }
 }
 

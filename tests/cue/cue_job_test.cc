@@ -315,11 +315,9 @@ TEST(CueJob, VirtualCuerPhonesGiveTheKeysItCued) {
     for (const Label& l : cued->labels) truth += (truth.empty() ? "" : " ") + l.text;
     EXPECT_EQ(t["sequence"].get<std::string>(), truth) << t["take"];
     EXPECT_EQ(t["symbols"], "ipa");
-    // espeak-ng names missing from its table stay uncued phones (docs/phonetics.md
-    // section 1; e.g. ";" in sentence 5): csw cue warns about them, and they do
-    // not change the keys.
-    for (const json& w : t["warnings"])
-      EXPECT_NE(w.get<std::string>().find(": unknown ipa phone symbol '"), std::string::npos) << w;
+    // Every phone the virtual cuer writes is a known symbol (espeak-ng's
+    // linking glide ";" is dropped by Phonetise, docs/phonetics.md).
+    EXPECT_TRUE(t["warnings"].empty()) << t["warnings"].dump();
     keys += t["keys"].get<int64_t>();
   }
   EXPECT_GE(keys, 10 * sentences);  // sentences of several words each

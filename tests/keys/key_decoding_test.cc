@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/labels.h"
 
 namespace csw::keys {
 namespace {
@@ -20,8 +21,9 @@ KeyPosteriors Script(const std::vector<std::pair<std::string, int>>& runs, doubl
   p.placement = Eigen::MatrixXd::Constant(n, kNumPlacements, (1 - high) / (kNumPlacements - 1));
   int64_t t = 0;
   for (const auto& [code, len] : runs) {
-    int pl = 0, sh = 0;
-    EXPECT_TRUE(ParseKeyCode(code, &pl, &sh));
+    ::csw::KeyCode key;
+    EXPECT_TRUE(TryParseKeyCode(code, &key));
+    const int pl = key.placement, sh = key.shape;
     for (int i = 0; i < len; ++i, ++t) {
       p.shape(t, sh) = high;
       p.placement(t, pl) = high;

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "core/labels.h"
 
 namespace csw::keys {
 namespace {
@@ -202,38 +203,23 @@ TEST(GaussianClassifier, RejectsBadInput) {
   EXPECT_THROW(GaussianClassifier::FromClasses({c}, 1, {"u", "v"}, {}), InvalidInput);
 }
 
-TEST(KeyCodes, ParseAndLabelTiers) {
-  int p = -1, s = -1;
-  EXPECT_TRUE(ParseKeyCode("25", &p, &s));
-  EXPECT_EQ(p, 2);
-  EXPECT_EQ(s, 5);
-  EXPECT_TRUE(ParseKeyCode(" 08 ", &p, &s));
-  EXPECT_EQ(p, 0);
-  EXPECT_EQ(s, 8);
-  EXPECT_FALSE(ParseKeyCode("69", &p, &s));  // placement 6 out of range
-  EXPECT_FALSE(ParseKeyCode("19", &p, &s));  // shape 9
-  EXPECT_FALSE(ParseKeyCode("2", &p, &s));
-  EXPECT_FALSE(ParseKeyCode("a5", &p, &s));
-
+TEST(KeyCodes, TargetFramesFromTheLabelTiers) {
+  EXPECT_EQ(KeyCode(2, 5), "25");
   LabelTier keys{"keys", LabelTier::Kind::kPoint, 0, 2, {{0.1, 0.1, "00"}, {0.5, 0.5, "25"}, {1.0, 1.0, "31"}}};
   LabelTier places{"placement_targets", LabelTier::Kind::kPoint, 0, 2, {{0.52, 0.52, "25"}, {1.05, 1.05, "31"}}};
-  const KeyLabels l = LabelsFromTiers(keys, &places, 100.0, 200, "take1");
+  const KeyLabels l = LabelsFromTargets(ReadKeyTargets({keys, places}, "take1"), 100.0, 200, "take1");
   EXPECT_EQ(l.shape_frames, (std::vector<int64_t>{10, 50, 100}));
   EXPECT_EQ(l.shapes, (std::vector<int>{0, 5, 1}));
   EXPECT_EQ(l.placement_frames, (std::vector<int64_t>{52, 105}));
   EXPECT_EQ(l.placements, (std::vector<int>{2, 3}));
   EXPECT_EQ(l.placement_shapes, (std::vector<int>{5, 1}));
-  const KeyLabels same = LabelsFromTiers(keys, nullptr, 100.0, 200, "take1");
+  const KeyLabels same = LabelsFromTargets(ReadKeyTargets({keys}, "take1"), 100.0, 200, "take1");
   EXPECT_EQ(same.placement_frames, same.shape_frames);
-
-  keys.labels[1].text = "2x";
-  try {
-    LabelsFromTiers(keys, nullptr, 100.0, 200, "take1");
-    FAIL() << "bad code accepted";
-  } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("take1: tier keys: label 2"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("\"2x\""), std::string::npos) << e.what();
-  }
+  EXPECT_EQ(same.placements, (std::vector<int>{0, 2, 3}));
+  // Times past the take's end land on its last frame.
+  const KeyLabels clipped = LabelsFromTargets(ReadKeyTargets({keys}, "take1"), 100.0, 60, "take1");
+  EXPECT_EQ(clipped.shape_frames, (std::vector<int64_t>{10, 50, 59}));
+  EXPECT_THROW(LabelsFromTargets(ReadKeyTargets({keys}, "take1"), 0.0, 60, "take1"), InvalidInput);
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 #include "analysis/keys/key_model.h"
 #include "analysis/keys/key_timing.h"
 #include "core/error.h"
+#include "core/labels.h"
 #include "datasets/virtual_cuer.h"
 #include "models/gaussian_fill.h"
 #include "models/rigid_motion.h"
@@ -26,12 +27,6 @@
 
 namespace csw::keys {
 namespace {
-
-const LabelTier* FindTier(const Take& take, const std::string& name) {
-  for (const auto& t : take.tiers)
-    if (t.name == name) return &t;
-  return nullptr;
-}
 
 SimulateOptions Defaults() {
   SimulateOptions o;
@@ -347,11 +342,9 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
     cleaning::FillGaps(s.r.take.markers, {&spline, &dct}, static_cast<int64_t>(0.5 * s.r.take.rate_hz), &filled);
     s.features[0] = ComputeHandFeatures(filled, binding, layout, head);
     s.features[1] = ComputeHandFeatures(s.r.clean, binding, layout, head);
-    const LabelTier* keys = FindTier(s.r.take, "keys");
-    const LabelTier* places = FindTier(s.r.take, "placement_targets");
-    ASSERT_NE(keys, nullptr);
-    ASSERT_NE(places, nullptr);
-    s.labels = LabelsFromTiers(*keys, places, s.r.take.rate_hz, s.r.take.frames(), s.r.take.name);
+    const KeyTargets targets = ReadKeyTargets(s.r.take, s.r.take.name);
+    ASSERT_TRUE(targets.placement_from_own_tier);
+    s.labels = LabelsFromTargets(targets, s.r.take.rate_hz, s.r.take.frames(), s.r.take.name);
     takes.push_back(std::move(s));
   }
   const int train = sentences / 3;
@@ -479,11 +472,9 @@ TEST(VirtualCuerKeys, OtherLabLayoutAndShiftedTiming) {
     s.features[0] = ComputeHandFeatures(filled, binding, layout, head);
     s.features[1] = ComputeHandFeatures(s.r.clean, binding, layout, head);
     s.features[2] = s.features[1];
-    const LabelTier* keys = FindTier(s.r.take, "keys");
-    const LabelTier* places = FindTier(s.r.take, "placement_targets");
-    ASSERT_NE(keys, nullptr);
-    ASSERT_NE(places, nullptr);
-    s.labels = LabelsFromTiers(*keys, places, s.r.take.rate_hz, s.r.take.frames(), s.r.take.name);
+    const KeyTargets targets = ReadKeyTargets(s.r.take, s.r.take.name);
+    ASSERT_TRUE(targets.placement_from_own_tier);
+    s.labels = LabelsFromTargets(targets, s.r.take.rate_hz, s.r.take.frames(), s.r.take.name);
     takes.push_back(std::move(s));
   }
   const Tally clean = Evaluate(takes, sentences / 3, 1, layout, head, "lab2, shifted timing, clean markers");

@@ -12,6 +12,7 @@
 #include "core/markerset.h"
 #include "datasets/virtual_cuer.h"
 #include "io/corpus/corpus.h"
+#include "tests/keys_job/cuer_corpus.h"
 #include "tests/testing/testing.h"
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/keys_job.h"
@@ -77,34 +78,9 @@ TEST(KeysSuggestText, RendersMissingKeysAndTheComparison) {
             "2 of 3 keys have a suggested shape target; tiers 'keys_suggested' and 'placement_suggested' written\n");
 }
 
-// Six virtual-cuer sentences (no occlusions) with audio off, in a corpus that
-// remembers the marker set, and their truth files.
-struct Fixture {
-  testing::TempDir dir;
-  std::string corpus, keys, truth;
-  std::vector<SimulationResult> sims;
-  Fixture() {
-    corpus = (dir / "c.h5").string();
-    keys = (dir / "keys.h5").string();
-    truth = (dir / "truth").string();
-    fs::create_directories(truth);
-    SimulateOptions o;
-    o.audio = false;
-    o.occlusions = false;
-    const VirtualCuer cuer(o);
-    const std::string set = MarkerSetToJson(cuer.MakeMarkerSet());
-    const auto texts = ShippedSentences();
-    CorpusTransaction tx(corpus);
-    const int n = testing::kSanitized ? 4 : 6;
-    for (int i = 0; i < n; ++i) {
-      sims.push_back(cuer.SimulateSentence("s" + std::to_string(i), texts[static_cast<size_t>(i)]));
-      Take t = sims.back().take;
-      t.markerset_json = set;
-      tx.WriteTake(t);
-      std::ofstream(fs::path(truth) / ("s" + std::to_string(i) + ".truth.json")) << TruthToJson(sims.back());
-    }
-    tx.Commit();
-  }
+// Six virtual-cuer sentences (four under the sanitizers) with their truth files.
+struct Fixture : testing::CuerCorpus {
+  Fixture() : CuerCorpus(testing::kSanitized ? 4 : 6) {}
 };
 
 TEST(KeysSuggestJob, SuggestionsLandNearTheTrueTargetsAndAreWritten) {

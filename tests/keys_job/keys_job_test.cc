@@ -2,13 +2,17 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 
+#include "analysis/keys/hand_features.h"
 #include "core/error.h"
 #include "core/markerset.h"
 #include "datasets/virtual_cuer.h"
 #include "io/corpus/corpus.h"
 #include "io/models/model_file.h"
+#include "tests/keys_job/cuer_corpus.h"
 #include "tests/testing/testing.h"
 #include "workbench/jobs/job_util.h"
 
@@ -62,28 +66,10 @@ TEST(KeysText, RendersTheScoreReport) {
             "aligned decoding: 7 of 10 keys within 40 ms; target error 31.2 ms (sd 12.5)\n");
 }
 
-// Six virtual-cuer sentences (no occlusions, so every feature is observed) in
-// a corpus that remembers the marker set.
-struct Fixture {
-  testing::TempDir dir;
-  std::string corpus, keys;
-  Fixture() {
-    corpus = (dir / "c.h5").string();
-    keys = (dir / "keys.h5").string();
-    SimulateOptions o;
-    o.audio = false;
-    o.occlusions = false;
-    const VirtualCuer cuer(o);
-    const std::string set = MarkerSetToJson(cuer.MakeMarkerSet());
-    const auto texts = ShippedSentences();
-    CorpusTransaction tx(corpus);
-    for (int i = 0; i < 6; ++i) {
-      Take t = cuer.SimulateSentence("s" + std::to_string(i), texts[static_cast<size_t>(i)]).take;
-      t.markerset_json = set;
-      tx.WriteTake(t);
-    }
-    tx.Commit();
-  }
+// Six virtual-cuer sentences (no occlusions, so every feature is observed):
+// four to train on, two to score.
+struct Fixture : testing::CuerCorpus {
+  Fixture() : CuerCorpus(6) {}
 };
 
 TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
@@ -108,8 +94,13 @@ TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
   s.corpus = fx.corpus;
   s.keys = fx.keys;
   s.takes = {"s4,s5"};
+#ifdef CSW_FIGURES_MODULE_FILE
+  ::setenv("CSW_FIGURES_MODULE", CSW_FIGURES_MODULE_FILE, 1);
+  s.figures = (fx.dir / "figures").string();
+#endif
   const json sr = KeysScore(s, progress);
   ASSERT_EQ(sr["takes"].size(), 2u);
+  EXPECT_EQ(sr["takes"][0]["scores_written"], "keys");
   const Corpus c = Corpus::Open(fx.corpus);
   int64_t expected = 0;
   for (const char* name : {"s4", "s5"}) {
@@ -146,6 +137,53 @@ TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
   // Four training sentences, no occlusions: most labelled frames are right.
   EXPECT_GE(sr["shape"]["accuracy"].get<double>(), 0.6);
   EXPECT_GE(sr["placement"]["accuracy"].get<double>(), 0.6);
+
+  // The posteriors stored in the corpus are those of the model on the take's
+  // features, bit for bit (score set "keys", row-major frames × classes).
+  const keys::KeyModel model = *LoadModelFile(fx.keys).keys;
+  for (const char* name : {"s4", "s5"}) {
+    const Take take = c.LoadTake(name);
+    const MarkerBinding b = BindMarkerSet(ParseMarkerSet(c.TakeMarkerSet(name), name), take.marker_names, false, name);
+    const keys::KeyPosteriors want =
+        keys::ScoreFrames(model, keys::ComputeHandFeatures(take.markers, b, model.layout, model.head_reference));
+    const std::optional<TakeScores> got = c.LoadScores(name, "keys");
+    ASSERT_TRUE(got.has_value()) << name;
+    EXPECT_EQ(got->rate_hz, take.rate_hz);
+    EXPECT_EQ(got->start_s, 0.0);
+    EXPECT_EQ(got->source, fx.keys);
+    ASSERT_EQ(got->matrices.size(), 2u);
+    for (const ScoreMatrix& m : got->matrices) {  // name order: placement, shape
+      const Eigen::MatrixXd& p = m.name == "shape" ? want.shape : want.placement;
+      ASSERT_EQ(m.rows, take.frames()) << name << " " << m.name;
+      ASSERT_EQ(m.cols, m.name == "shape" ? 9 : 6) << m.name;
+      ASSERT_EQ(m.column_names.back(), m.name == "shape" ? "8" : "5");
+      int64_t differ = 0;
+      for (int64_t t = 0; t < m.rows; ++t)
+        for (int64_t k = 0; k < m.cols; ++k)
+          if (m.values[static_cast<size_t>(t * m.cols + k)] != p(t, k)) ++differ;
+      EXPECT_EQ(differ, 0) << name << " " << m.name;
+    }
+  }
+#ifdef CSW_FIGURES_MODULE_FILE
+  // The two confusion matrices, as PNG files of a real size (a labelled 9 × 9
+  // grid with counts: tens of kB; an empty canvas compresses to a few kB).
+  ASSERT_EQ(sr["figures"].size(), 2u);
+  for (const char* f : {"shape_confusion.png", "placement_confusion.png"}) {
+    const std::filesystem::path png = fx.dir / "figures" / f;
+    ASSERT_TRUE(std::filesystem::exists(png)) << png;
+    std::ifstream in(png, std::ios::binary);
+    unsigned char h[24] = {};
+    in.read(reinterpret_cast<char*>(h), 24);
+    EXPECT_EQ(std::string(reinterpret_cast<char*>(h) + 1, 3), "PNG") << f;
+    const int width = (h[16] << 24) | (h[17] << 16) | (h[18] << 8) | h[19];
+    const int height = (h[20] << 24) | (h[21] << 16) | (h[22] << 8) | h[23];
+    EXPECT_GE(width, 300) << f;
+    EXPECT_GE(height, 300) << f;
+    EXPECT_GT(std::filesystem::file_size(png), 8000u) << f;
+  }
+  EXPECT_NE(KeysScoreText(sr).find("figure: "), std::string::npos);
+  ::unsetenv("CSW_FIGURES_MODULE");
+#endif
 }
 
 TEST(KeysJob, BadLabelCodesAndMissingKeyModelGiveClearErrors) {
@@ -167,7 +205,10 @@ TEST(KeysJob, BadLabelCodesAndMissingKeyModelGiveClearErrors) {
     KeysTrain(t, progress);
     FAIL() << "bad code accepted";
   } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("take 's0': tier keys: label 2"), std::string::npos) << e.what();
+    // One error naming the corpus, the take, the tier, the label and the code (core/labels.h).
+    EXPECT_NE(std::string(e.what()).find(fx.corpus + ": take 's0': tier 'keys': label 2 at "), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("bad key code '9x'"), std::string::npos) << e.what();
   }
   // A model file without /keys.
   SaveModelFile(fx.keys, ModelFile{});

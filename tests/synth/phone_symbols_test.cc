@@ -253,6 +253,25 @@ TEST(PhoneSymbols, GapsFillersAndLiaisonMarks) {
   EXPECT_EQ(Codes(CuePhoneTier(Tier("s a k fp a", ""), PhoneSymbols::kSppas, "w").keys), "00 13 12 15 00");
   // A liaison mark on its own is nothing (not a pause): z ‿ a -> 12.
   EXPECT_EQ(Codes(CuePhoneTier(Tier("z ‿ a", ""), PhoneSymbols::kIpa, "w").keys), "00 12 00");
+  // espeak-ng's linking glide ";" is nothing in every set (synth/phonetics.h
+  // IsEspeakLinking): ʒ i ; e -> ʒi 31 (shape 1 of ʒ at the mouth, 3, of i),
+  // e alone 55 (shape 5 at the throat), as without it, and the
+  // interval of ";" goes to the i before it; no warning.
+  for (PhoneSymbols set : {PhoneSymbols::kIpa, PhoneSymbols::kXsampa, PhoneSymbols::kSppas})
+    EXPECT_EQ(ReadPhoneSymbol(";", set).kind, SymbolReading::Kind::kNothing);
+  LabelTier linked{"phones",
+                   LabelTier::Kind::kInterval,
+                   0.0,
+                   0.4,
+                   {{0.0, 0.1, "ʒ"}, {0.1, 0.2, "i"}, {0.2, 0.25, ";"}, {0.25, 0.4, "e"}}};
+  const CuedTier lc = CuePhoneTier(linked, PhoneSymbols::kIpa, "w");
+  EXPECT_EQ(Codes(lc.keys), "00 31 55 00");
+  EXPECT_EQ(Codes(CuePhoneTier(Tier("ʒ i e", ""), PhoneSymbols::kIpa, "w").keys), Codes(lc.keys));
+  EXPECT_TRUE(lc.mapped.warnings.empty());
+  ASSERT_EQ(lc.mapped.phones.size(), 3u);
+  EXPECT_EQ(lc.mapped.phones[1].ipa, "i");
+  EXPECT_DOUBLE_EQ(lc.mapped.phones[1].end_s, 0.25);
+  EXPECT_DOUBLE_EQ(lc.mapped.phones[2].start_s, 0.25);
   // "<p:>" (WebMAUS) and "sp" are pauses in every set.
   EXPECT_EQ(Codes(CuePhoneTier(Tier("s a k <p:> a", ""), PhoneSymbols::kXsampa, "w").keys), "00 13 12 15 00");
   EXPECT_EQ(Codes(CuePhoneTier(Tier("s a k sp a", ""), PhoneSymbols::kIpa, "w").keys), "00 13 12 15 00");

@@ -188,6 +188,30 @@ TEST(Phonetics, Utf8WordText) {
   EXPECT_EQ(SpokenIpa(u), "e t e p ɛ ʁ");
 }
 
+// espeak-ng's linking glide ";" between a word-final [i] and a vowel-initial
+// word ("bougie ; éclaire", "Marie ; a", "il y ; a") is no phoneme of the
+// words: dropped without a warning, its time given to the [i] before it.
+TEST(Phonetics, LinkingGlideIsDropped) {
+  EXPECT_TRUE(IsEspeakLinking(";"));
+  EXPECT_FALSE(IsEspeakLinking("j"));
+  for (const auto& [text, ipa] : std::vector<std::pair<std::string, std::string>>{
+           {"La bougie éclaire la chambre.", "l a b u ʒ i e k l ɛ ʁ l a ʃ ɑ̃ b ʁ"},
+           {"Marie a un ami.", "m a ʁ i a œ̃ n a m i"}}) {
+    const Utterance u = Phonetise(text);
+    EXPECT_EQ(SpokenIpa(u), ipa) << text;
+    EXPECT_TRUE(u.warnings.empty()) << text << ": " << (u.warnings.empty() ? "" : u.warnings[0]);
+    for (const Phone& p : u.phones) EXPECT_NE(p.espeak, ";") << text;
+    ExpectContiguous(u);
+    // The [i] before the next word's vowel ends where that vowel starts, and
+    // its word ends with it.
+    for (size_t i = 0; i + 1 < u.phones.size(); ++i)
+      if (u.phones[i].ipa == "i" && u.phones[i + 1].word != u.phones[i].word && u.phones[i + 1].word >= 0) {
+        EXPECT_DOUBLE_EQ(u.phones[i].end_s, u.phones[i + 1].start_s) << text;
+        EXPECT_DOUBLE_EQ(u.words[u.phones[i].word].end_s, u.phones[i].end_s) << text;
+      }
+  }
+}
+
 TEST(Phonetics, AffricateIsSplit) {
   const Utterance u = Phonetise("tchèque");
   EXPECT_EQ(SpokenIpa(u), "t ʃ ɛ k");

@@ -437,7 +437,9 @@ class KeysCommand : public Command {
                        "Marker-set JSON; default the one each take was imported with");
     score_->add_option("--min-key", score_options_.decode.min_key_ms, "Free decoding: shortest key (ms)")
         ->capture_default_str();
-    score_->add_flag("--dry-run", score_options_.dry_run, "Report only: write no tier");
+    score_->add_flag("--dry-run", score_options_.dry_run, "Report only: write no tier nor scores");
+    score_->add_option("--figures", score_options_.figures,
+                       "Folder for the shape and placement confusion matrices (PNG), when takes have labels");
     score_->add_flag("--json", json_, "Print the report as JSON");
     suggest_ = sub_->add_subcommand("suggest",
                                     "Propose a target frame for every expected key (the hand-speed minimum nearest "

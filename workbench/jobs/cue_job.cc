@@ -11,6 +11,7 @@
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/take_data.h"
 #include "workbench/jobs/take_selection.h"
+#include "workbench/jobs/tier_util.h"
 
 namespace csw::jobs {
 
@@ -40,21 +41,14 @@ std::string CueOptions::Check() const {
 
 namespace {
 
-std::string TierList(const std::vector<LabelTier>& tiers) {
-  std::string s;
-  for (const LabelTier& t : tiers) s += (s.empty() ? "'" : ", '") + t.name + "'";
-  return s.empty() ? "none" : s;
-}
-
 // Cues one take's tiers: the result JSON, and `tiers` with the expected keys
 // tier replaced or added. `end_s` extends the phone tier's domain (a take's
 // duration) when longer.
 json CueTiers(const std::string& name, std::vector<LabelTier>* tiers, double end_s, const CueOptions& options,
               const std::string& where) {
-  const auto it =
-      std::find_if(tiers->begin(), tiers->end(), [&](const LabelTier& t) { return t.name == options.phones; });
-  if (it == tiers->end())
-    throw InvalidInput(where + ": no phone tier '" + options.phones + "' (tiers: " + TierList(*tiers) +
+  const LabelTier* it = FindTier(*tiers, options.phones);
+  if (it == nullptr)
+    throw InvalidInput(where + ": no phone tier '" + options.phones + "' (tiers: " + TierNames(*tiers) +
                        "); name it with --phones");
   LabelTier phones = *it;
   if (end_s > phones.end_s) phones.end_s = end_s;
@@ -87,9 +81,8 @@ json CueTiers(const std::string& name, std::vector<LabelTier>* tiers, double end
   }
 
   LabelTier out = FillIntervalGaps(cued.tier);
-  const auto old =
-      std::find_if(tiers->begin(), tiers->end(), [&](const LabelTier& t) { return t.name == options.tier; });
-  if (old != tiers->end()) {
+  LabelTier* old = FindTier(*tiers, options.tier);
+  if (old != nullptr) {
     *old = std::move(out);
   } else {
     tiers->push_back(std::move(out));

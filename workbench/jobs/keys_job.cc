@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <optional>
 #include <sstream>
 
@@ -10,12 +11,15 @@
 #include "core/error.h"
 #include "core/file_util.h"
 #include "core/json_util.h"
+#include "core/labels.h"
 #include "core/markerset.h"
 #include "io/corpus/corpus.h"
 #include "io/models/model_file.h"
+#include "workbench/jobs/figures.h"
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/take_data.h"
 #include "workbench/jobs/take_selection.h"
+#include "workbench/jobs/tier_util.h"
 
 #ifndef CSW_VERSION
 #define CSW_VERSION "unknown"
@@ -27,12 +31,6 @@ using nlohmann::json;
 using namespace csw::keys;
 
 namespace {
-
-const LabelTier* FindTier(const Take& take, const std::string& name) {
-  for (const auto& t : take.tiers)
-    if (t.name == name) return &t;
-  return nullptr;
-}
 
 // The marker set for a take: given, or remembered by the corpus; nullopt when neither.
 std::optional<MarkerSet> TakeSet(const Corpus& corpus, const std::string& take, const std::optional<MarkerSet>& given,
@@ -106,6 +104,26 @@ LabelTier IntervalTier(const std::string& name, double end_s) {
   return t;
 }
 
+// A posterior matrix as a corpus score matrix, columns named by class.
+ScoreMatrix ScoreMatrixOf(const std::string& name, const Eigen::MatrixXd& p) {
+  ScoreMatrix m;
+  m.name = name;
+  m.rows = p.rows();
+  m.cols = p.cols();
+  m.values.resize(static_cast<size_t>(p.size()));
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(m.values.data(), p.rows(),
+                                                                                     p.cols()) = p;
+  for (Eigen::Index c = 0; c < p.cols(); ++c) m.column_names.push_back(std::to_string(c));
+  return m;
+}
+
+std::vector<std::vector<int>> Counts(const Confusion& c) {
+  std::vector<std::vector<int>> out(static_cast<size_t>(c.counts.rows()));
+  for (Eigen::Index i = 0; i < c.counts.rows(); ++i)
+    for (Eigen::Index j = 0; j < c.counts.cols(); ++j) out[i].push_back(static_cast<int>(c.counts(i, j)));
+  return out;
+}
+
 std::string Fixed(double v, int digits) {
   std::ostringstream o;
   o.setf(std::ios::fixed);
@@ -177,18 +195,17 @@ json KeysTrain(const KeysTrainOptions& options, Progress& progress) {
       if (layout->head.empty()) layout->head = ms->head_cluster;
     }
     if (head.cols() == 0) head = HeadReference(take.markers, binding, *layout);
-    const LabelTier* tier = FindTier(take, options.tier);
-    if (tier == nullptr) throw InvalidInput(where + ": no label tier '" + options.tier + "'");
-    const LabelTier* ptier = FindTier(take, options.placement_tier);
+    const KeyTargets targets = ReadKeyTargets(take, where, {options.tier, options.placement_tier});
     const KeyLabels labels =
-        InRange(LabelsFromTiers(*tier, ptier, take.rate_hz, take.frames(), where), range.first, range.count);
+        InRange(LabelsFromTargets(targets, take.rate_hz, take.frames(), where), range.first, range.count);
     const HandFeatures features = ComputeHandFeatures(take.markers, binding, *layout, head);
     set.Add(features, labels, options.model);
     specs.push_back(range.spec);
-    result["takes"].push_back({{"take", range.spec},
-                               {"shape_targets", labels.shape_frames.size()},
-                               {"placement_targets", labels.placement_frames.size()},
-                               {"placement_tier", ptier != nullptr ? options.placement_tier : options.tier}});
+    result["takes"].push_back(
+        {{"take", range.spec},
+         {"shape_targets", labels.shape_frames.size()},
+         {"placement_targets", labels.placement_frames.size()},
+         {"placement_tier", targets.placement_from_own_tier ? options.placement_tier : options.tier}});
   }
   progress.Update("keys train: fit", 1.0);
   KeyModel model = TrainKeyModel(set, *layout, head, options.model);
@@ -234,6 +251,10 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
   const std::vector<TakeRange> ranges = SelectCorpusTakes(corpus, options.takes);
   std::optional<MarkerSet> given;
   if (!options.markerset.empty()) given = LoadMarkerSet(options.markerset);
+  if (!options.figures.empty()) {
+    figures::Require();
+    std::filesystem::create_directories(options.figures);
+  }
 
   json result = {{"corpus", options.corpus}, {"keys", options.keys}, {"takes", json::array()}};
   Confusion shape(kNumShapes), placement(kNumPlacements);
@@ -242,6 +263,7 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
   std::vector<double> errors_ms;
   bool scored = false;
   std::vector<std::pair<std::string, std::vector<LabelTier>>> writes;
+  std::vector<std::pair<std::string, TakeScores>> score_writes;
   for (size_t i = 0; i < ranges.size(); ++i) {
     const TakeRange& range = ranges[i];
     progress.Update("keys score: " + range.take, static_cast<double>(i) / static_cast<double>(ranges.size()));
@@ -275,20 +297,19 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
     new_tiers.push_back(extents_tier("shape_extents", post.shape));
     new_tiers.push_back(extents_tier("placement_extents", post.placement));
 
-    if (const LabelTier* tier = FindTier(take, options.tier); tier != nullptr && !tier->labels.empty()) {
+    if (const LabelTier* tier = FindTier(take.tiers, options.tier); tier != nullptr && !tier->labels.empty()) {
       scored = true;
-      const KeyLabels labels =
-          LabelsFromTiers(*tier, FindTier(take, options.placement_tier), rate, take.frames(), where);
+      const KeyTargets targets = ReadKeyTargets(take, where, {options.tier, options.placement_tier});
+      const KeyLabels labels = LabelsFromTargets(targets, rate, take.frames(), where);
       Confusion ts(kNumShapes), tp(kNumPlacements);
       std::vector<std::string> expected;
-      std::vector<ExpectedKey> expected_keys;
+      std::vector<keys::ExpectedKey> expected_keys;
       for (size_t k = 0; k < labels.shape_frames.size(); ++k) {
         ts.Add(labels.shapes[k], ArgMax(post.shape, labels.shape_frames[k]));
         // The expected sequence: the label tier's codes in time order.
-        int p = 0, sh = 0;
-        ParseKeyCode(tier->labels[k].text, &p, &sh);
-        expected.push_back(KeyCode(p, sh));
-        expected_keys.push_back({p, sh});
+        const ::csw::KeyCode& code = targets.shape[k].code;
+        expected.push_back(code.Text());
+        expected_keys.push_back({code.placement, code.shape});
       }
       for (size_t k = 0; k < labels.placement_frames.size(); ++k)
         tp.Add(labels.placements[k], ArgMax(post.placement, labels.placement_frames[k]));
@@ -341,14 +362,38 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
       tiers.push_back(std::move(t));
     }
     tj["tiers_written"] = options.dry_run ? json::array() : json(names);
+    tj["scores_written"] = options.dry_run ? json() : json("keys");
     writes.push_back({range.take, std::move(tiers)});
+    TakeScores scores;
+    scores.name = "keys";
+    scores.rate_hz = rate;
+    scores.start_s = 0.0;
+    scores.source = options.keys;
+    scores.matrices = {ScoreMatrixOf("shape", post.shape), ScoreMatrixOf("placement", post.placement)};
+    score_writes.push_back({range.take, std::move(scores)});
     result["takes"].push_back(std::move(tj));
   }
   if (!options.dry_run && !writes.empty()) {
     progress.Update("keys score: writing tiers", 0.0);
     CorpusTransaction tx(options.corpus);
     for (const auto& [take, tiers] : writes) tx.WriteTiers(take, tiers);
+    for (const auto& [take, scores] : score_writes) tx.WriteScores(take, scores);
     tx.Commit();
+  }
+  if (scored && !options.figures.empty()) {
+    progress.Update("keys score: figures", 1.0);
+    auto labels = [](int n) {
+      std::vector<std::string> l;
+      for (int i = 0; i < n; ++i) l.push_back(std::to_string(i));
+      return l;
+    };
+    const std::string sp = (std::filesystem::path(options.figures) / "shape_confusion.png").string();
+    const std::string pp = (std::filesystem::path(options.figures) / "placement_confusion.png").string();
+    figures::SaveConfusionMatrix(sp, "Hand shapes at the labelled frames", labels(kNumShapes), Counts(shape),
+                                 "labelled shape", "posterior argmax");
+    figures::SaveConfusionMatrix(pp, "Placements at the labelled frames", labels(kNumPlacements), Counts(placement),
+                                 "labelled placement", "posterior argmax");
+    result["figures"] = {sp, pp};
   }
   if (scored) {
     double mean = 0, sd = 0;
@@ -399,6 +444,8 @@ std::string KeysScoreText(const json& r) {
       << " keys within 40 ms; target error " << Fixed(a["target_error_ms"]["mean"].get<double>(), 1) << " ms (sd "
       << Fixed(a["target_error_ms"]["sd"].get<double>(), 1) << ")\n";
   }
+  if (r.contains("figures"))
+    for (const json& f : r["figures"]) o << "figure: " << f.get<std::string>() << "\n";
   return o.str();
 }
 

@@ -21,6 +21,13 @@
 //                         (analysis/keys/key_timing.h)
 //   placement_aligned     point tier: the same keys' placement targets, where
 //                         the placement changes
+// and the gestural score itself as the take's score set "keys" (io/corpus
+// TakeScores, docs/corpus-format.md): matrices "shape" (frames × 9) and
+// "placement" (frames × 6) of posteriors, columns "0".."8" / "0".."5", at the
+// take's frame rate from time 0, source = the key model file.
+// With --figures DIR and labels: DIR/shape_confusion.png and
+// DIR/placement_confusion.png (labelled class vs the posterior argmax at the
+// labelled frames, over every scored take).
 // Takes whose label tier is present are scored: accuracy at the labelled
 // frames, edit-distance alignment of the free decoding, aligned target error
 // (an aligned key is correct when its target lies within 40 ms of its label).
@@ -56,7 +63,8 @@ struct KeysScoreOptions {
   std::string placement_tier = "placement_targets";  // placement targets, when present (else `tier`)
   std::string markerset;
   keys::DecodeOptions decode;
-  bool dry_run = false;  // report only, write no tier
+  bool dry_run = false;  // report only, write no tier nor scores
+  std::string figures;   // folder for the confusion-matrix figures; "" = none
   std::string Check() const;
 };
 
@@ -65,11 +73,11 @@ struct KeysScoreOptions {
 nlohmann::json KeysTrain(const KeysTrainOptions& options, Progress& progress);
 std::string KeysTrainText(const nlohmann::json& result);
 
-// {"corpus", "keys", "takes": [{"take", "frames", "decoded_keys", "tiers_written", ...}],
+// {"corpus", "keys", "takes": [{"take", "frames", "decoded_keys", "tiers_written", "scores_written", ...}],
 //  "shape": {"accuracy", "count", "confusion"}, "placement": {...},
 //  "sequence": {"free": {"keys_correct", "keys_expected", "insertions", "deletions", "substitutions"},
 //               "aligned": {"keys_correct", "keys_expected", "target_error_ms": {"mean", "sd"}}}}
-// (the scoring members only when some take has the label tier).
+// (the scoring members only when some take has the label tier), "figures": [paths] when drawn.
 nlohmann::json KeysScore(const KeysScoreOptions& options, Progress& progress);
 std::string KeysScoreText(const nlohmann::json& result);
 

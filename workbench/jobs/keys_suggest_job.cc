@@ -16,6 +16,7 @@
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/take_data.h"
 #include "workbench/jobs/take_selection.h"
+#include "workbench/jobs/tier_util.h"
 
 namespace csw::jobs {
 
@@ -37,18 +38,6 @@ std::string KeysSuggestOptions::Check() const {
 }
 
 namespace {
-
-const LabelTier* FindTier(const std::vector<LabelTier>& tiers, const std::string& name) {
-  for (const LabelTier& t : tiers)
-    if (t.name == name) return &t;
-  return nullptr;
-}
-
-std::string TierNames(const std::vector<LabelTier>& tiers) {
-  std::string s;
-  for (const LabelTier& t : tiers) s += (s.empty() ? "'" : ", '") + t.name + "'";
-  return s.empty() ? "none" : s;
-}
 
 double Round(double v, double step) { return std::isfinite(v) ? std::round(v / step) * step : v; }
 

@@ -21,6 +21,7 @@
 #include <limits>
 #include <sstream>
 
+#include "analysis/keys/key_model.h"
 #include "core/error.h"
 #include "core/file_util.h"
 #include "io/corpus/corpus.h"
@@ -533,6 +534,69 @@ TEST(ModelFile, MisShapedOrMissingDatasetIsAParseErrorNamingIt) {
         for (hsize_t x : d.dims) n *= x;
         std::vector<double> v = d.values.empty() ? std::vector<double>(n, 0.5) : d.values;
         raw.ReplaceDoubles(d.dataset, d.dims, v);
+      }
+    }
+    std::string msg = ErrorOf<ParseError>([&] { LoadModelFile(path); });
+    EXPECT_CONTAINS(msg, path);
+    EXPECT_CONTAINS(msg, d.dataset);
+    EXPECT_CONTAINS(msg, d.expected);
+  }
+}
+
+// A key model (/keys, analysis/keys/key_model.h): 9 shapes on 7 distances,
+// 6 placements on 3 coordinates, 10 samples per class.
+ModelFile MakeKeys() {
+  keys::KeyTrainingSet set;
+  set.shape_samples.resize(90, keys::kNumDistances);
+  set.placement_samples.resize(60, 3);
+  for (int i = 0; i < 90; ++i) {
+    for (int d = 0; d < keys::kNumDistances; ++d) set.shape_samples(i, d) = 10 * (i % 9) + d + std::sin(i + d);
+    set.shape_labels.push_back(i % 9);
+  }
+  for (int i = 0; i < 60; ++i) {
+    for (int d = 0; d < 3; ++d) set.placement_samples(i, d) = 30 * (i % 6) - 10 * d + std::cos(i * d);
+    set.placement_labels.push_back(i % 6);
+  }
+  keys::HandLayout layout;
+  layout.proximal = {"T1", "I1", "M1", "R1", "L1"};
+  layout.distal = {"TT", "IT", "MT", "RT", "LT"};
+  layout.palm = {"P1", "P2", "P3"};
+  layout.head = {"H1", "H2", "H3"};
+  Eigen::Matrix3Xd head(3, 3);
+  head << 0, 100, 0, 0, 0, 100, 0, 0, 0;
+  ModelFile f;
+  f.keys = keys::TrainKeyModel(set, layout, head, {});
+  return f;
+}
+
+TEST(ModelFile, DamagedKeyModelIsOneParseErrorNamingTheDataset) {
+  TempDir dir;
+  const std::string good = (dir / "keys.h5").string();
+  SaveModelFile(good, MakeKeys());
+  ASSERT_TRUE(LoadModelFile(good).keys.has_value());
+  const std::string good_bytes = ReadBytes(good);
+  std::vector<double> not_pd(9 * 7 * 7, 0.0);  // every covariance 0 but one negative diagonal entry
+  not_pd[0] = -1;
+  const std::vector<Damage> cases = {
+      {"/keys/shape/means", {9, 6}, {}, "expected (classes, features)"},
+      {"/keys/shape/means", {9 * 7}, {}, "has rank 1, expected 2"},
+      {"/keys/shape/covariances", {9, 7, 7}, not_pd, "the covariance of class shape 0 is not positive definite"},
+      {"/keys/placement/priors", {}, {}, "missing dataset"},
+      {"/keys/placement/means", {6, 3}, std::vector<double>(18, kNaN), "non-finite value (nan) at index 0"},
+      {"/keys/head_reference", {3, 2}, {}, "has shape (3, 2), expected (points, 3)"},
+  };
+  for (const Damage& d : cases) {
+    SCOPED_TRACE(d.dataset + ": " + d.expected);
+    const std::string path = (dir / "bad.h5").string();
+    WriteBytes(path, good_bytes);
+    {
+      RawFile raw(path);
+      if (d.dims.empty()) {
+        raw.Delete(d.dataset);
+      } else {
+        hsize_t n = 1;
+        for (hsize_t x : d.dims) n *= x;
+        raw.ReplaceDoubles(d.dataset, d.dims, d.values.empty() ? std::vector<double>(n, 0.5) : d.values);
       }
     }
     std::string msg = ErrorOf<ParseError>([&] { LoadModelFile(path); });
