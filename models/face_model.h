@@ -34,7 +34,7 @@
 // has w = 1, k = (a − 1)(R̄x + t̄ − c)). k = 0 is the blend. The offsets are
 // kept only when they cut the throat markers' training residual by more than
 // five times what fitting noise would (FitFaceModel): on the default virtual
-// cuer (a true blend) they are all zero, on its lab2 layout 69-81 mm.
+// cuer (a true blend) they are all zero, on its lab2 layout 85-91 mm.
 
 #include <Eigen/Core>
 #include <string>
