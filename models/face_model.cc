@@ -76,6 +76,7 @@ struct ThroatProblem {
   const Eigen::MatrixXd* params = nullptr;  // P x n, one column per frame
   const Eigen::Matrix3Xd* observed = nullptr;
   int np = 0;
+  bool fit_offsets = true;  // false: k stays at its start (zero Jacobian columns)
   int NumResiduals() const { return 3 * static_cast<int>(observed->cols()); }
   int NumParameters() const { return 7 + 3 * np; }
 
@@ -103,7 +104,7 @@ struct ThroatProblem {
         for (int i = 0; i < 3; ++i) {
           jacobian[(1 + i) * rows + rr] = a(row, i);
           for (int c = 0; c < np; ++c) jacobian[(4 + i * np + c) * rows + rr] = a(row, i) * p[c];
-          jacobian[(4 + 3 * np + i) * rows + rr] = b(row, i);
+          jacobian[(4 + 3 * np + i) * rows + rr] = fit_offsets ? b(row, i) : 0.0;
         }
       }
     }
@@ -284,10 +285,41 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
     return data;
   };
 
-  // 4. Guided PCA, alternating with the throat weights.
+  // 4. Guided PCA, alternating with the throat weights: first the blend
+  // alone (k = 0), then with the rotation offsets; the offsets are kept when
+  // they cut the fitted throat markers' training residual (sum of squares, lab)
+  // by more than five times what fitting noise alone would (3 parameters per
+  // marker over 3 residuals per frame: a fraction 1/n of it), else the blend's
+  // weights are restored.
   const int rounds = fitted.empty() ? 0 : options.throat_weight_rounds;
-  for (int round = 0; round < rounds; ++round) {
-    if (progress) progress->Update("face model: throat weights", static_cast<double>(round) / rounds);
+  auto throat_rss = [&]() {
+    const Eigen::MatrixXd data = head_frame_data();
+    const GuidedPcaModel shape = FitGuidedPca(data, steps);
+    const Eigen::MatrixXd params = EstimateRows(shape, data);
+    double rss = 0;
+    for (int64_t f = 0; f < n; ++f) {
+      const Eigen::VectorXd x = shape.mean + shape.loadings * params.row(f).transpose();
+      const RigidTransform& pose = poses[static_cast<size_t>(f)];
+      for (int j : fitted) {
+        const Eigen::Vector3d xj = x.segment<3>(3 * j), k = model.rotation_offsets.row(j).transpose();
+        const double w = model.head_weights(j);
+        const Eigen::Vector3d pred = w * pose.Apply(xj) + (1.0 - w) * model.rest_pose.Apply(xj) +
+                                     pose.rotation * model.rest_pose.rotation.transpose() * k - k;
+        const float* o = lab.at(f, j);
+        rss += (pred - Eigen::Vector3d(o[0], o[1], o[2])).squaredNorm();
+      }
+    }
+    return rss;
+  };
+  double blend_rss = 0;
+  Eigen::VectorXd blend_weights;
+  for (int round = 0; round < 2 * rounds; ++round) {
+    const bool offsets = round >= rounds;
+    if (round == rounds) {
+      blend_rss = throat_rss();
+      blend_weights = model.head_weights;
+    }
+    if (progress) progress->Update("face model: throat weights", 0.5 * static_cast<double>(round) / rounds);
     const GuidedPcaModel shape = FitGuidedPca(head_frame_data(), steps);
     const Eigen::MatrixXd params = EstimateRows(shape, head_frame_data());  // n × P
     const Eigen::MatrixXd params_rows = params.transpose();                 // P × n, one column per frame
@@ -311,6 +343,7 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
       problem.params = &params_rows;
       problem.observed = &observed;
       problem.np = num_params;
+      problem.fit_offsets = offsets;
       // Unconstrained Levenberg-Marquardt; the weight is then clamped to [0, 1]
       // (only w and k are kept: the shape is refitted by the next round's PCA).
       ceres::TinySolver<ThroatProblem> solver;
@@ -325,6 +358,14 @@ FaceModel FitFaceModel(const FaceLayout& layout, const std::vector<MarkerArray>&
         model.rotation_offsets.row(j) = x.tail<3>().transpose();
       }
       if (progress) progress->CheckCancel();
+    }
+  }
+  if (rounds > 0) {
+    const double offset_rss = throat_rss();
+    const bool keep_offsets = blend_rss - offset_rss > 5.0 * blend_rss / static_cast<double>(n);
+    if (!keep_offsets) {
+      model.head_weights = blend_weights;
+      model.rotation_offsets.setZero();
     }
   }
 

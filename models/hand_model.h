@@ -63,7 +63,9 @@ struct HandLayout {
 };
 
 struct HandModelOptions {
-  int angle_components = 12;  // naH (the seed retains 12)
+  // naH. The seed retains 12; on the virtual cuer 12 give 1.8/2.1 mm visible
+  // error (training/held-out) and 20 give 1.0/1.3 mm (docs/models.md), hence 20.
+  int angle_components = 20;
   // true: the angle PCA is weighted by each angle's effect on the markers
   // (w_i = RMS marker displacement per radian of angle i at its mean, from a
   // first regression on the measured angles): the naH directions are those
@@ -133,12 +135,18 @@ HandModel FitHandModel(const HandLayout& layout, const std::vector<MarkerArray>&
 
 // Per-frame inversion of a model-ordered take (see inversion.h). pose is the
 // forearm cluster pose; params the naH parameters (unscaled, as Predict takes them).
-// The forearm cluster residuals are weighted by
-// clamp(info.training_rms_mm / forearm.info.training_rms_mm, 1, 10) (1 when
-// either is 0): the cluster is rigid to within noise while the hand model
-// misfits by millimetres, so unweighted hand residuals would tilt the forearm.
+// The forearm cluster residuals are weighted by kHandForearmWeight: the
+// cluster is rigid to within noise while the hand model misfits by
+// millimetres, so unweighted hand residuals would tilt the forearm. (Before
+// training_rms_mm meant the inversion's fit, the weight was
+// clamp(training_rms_mm / forearm rms, 1, 10), which was 10 on the virtual cuer.)
 // A warm start ending with an RMS above 3 · info.training_rms_mm + 1 mm is
-// retried from a cold start (Kabsch + measured angles) and the better kept.
+// retried from a cold start (Kabsch on the cluster, angles measured on the seen
+// hand markers with the missing ones from the gap filler when the model has
+// one) and the better kept; a solve still above the threshold is tried again
+// from two more starts (itself, continued; the mean posture at the Kabsch
+// pose) and the best kept (InversionResult::cold_retry marks all of these).
+inline constexpr double kHandForearmWeight = 10.0;
 InversionResult InvertHand(const HandModel& model, const MarkerArray& take, const InversionOptions& options = {},
                            Progress* progress = nullptr);
 

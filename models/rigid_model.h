@@ -23,7 +23,12 @@ struct ModelInfo {
   std::string csw_version;
   int64_t training_frames = 0;  // complete frames offered
   int64_t selected_frames = 0;  // kept by training-frame selection
-  double training_rms_mm = 0;   // fit residual over the selected frames
+  // RMS marker residual (3D distance) over the selected training frames of
+  // the model's best fit to each frame: rigid = the cluster's fit; face = the
+  // shape parameters' least-squares fit in the head frame; hand = the hand
+  // inversion (InvertHand from a cold start, the forearm frame known) of every
+  // selected frame, i.e. what inverting the training frames reaches.
+  double training_rms_mm = 0;
 };
 
 struct RigidModel {

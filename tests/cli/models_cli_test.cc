@@ -47,6 +47,80 @@ json RunJson(const std::string& args, const fs::path& dir) {
 
 double Mean(const json& stats) { return stats.at("mean_mm").get<double>(); }
 
+// Worst cases of issue 13 on both simulator layouts: 18 sentences (seed 7),
+// face and hand fitted on the first 6 with fitted throat weights and the
+// default configuration (20 hand parameters), then `csw invert --hide 0.1`.
+// Limits stated here: hidden-sample error p99.9 <= 5 mm and max <= 15 mm for
+// face and hand (issue 13); visible held-out means no worse than
+// docs/models.md before issue 13 on the default layout (face 0.322 mm, hand
+// 1.362 mm) and within 10 % of those on lab2. Measured (docs/models.md): default
+// face hidden p99.9 0.90 / max 1.10 mm, hand 2.43 / 6.51 mm; lab2 face
+// 0.98 / 1.71 mm, hand 3.06 / 8.14 mm. Under the sanitizers: 4 sentences
+// (2 for training), code paths only.
+void HiddenWorstCases(const std::string& layout) {
+  testing::TempDir dir;
+  const int sentences = testing::kSanitized ? 4 : 18, training = testing::kSanitized ? 2 : 6;
+  const fs::path sim = dir / "sim";
+  ASSERT_EQ(
+      Csw("simulate sentences --count " + std::to_string(sentences) + " --seed 7 --layout " + layout + " -o " + Q(sim),
+          dir.path())
+          .code,
+      0);
+  std::string files, train;
+  for (int i = 1; i <= sentences; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "sentence_%03d", i);
+    const std::string base = (sim / name).string();
+    files += " '" + base + ".c3d' '" + base + ".TextGrid'";
+    if (i <= training) train += std::string(train.empty() ? "" : ",") + name;
+  }
+  const fs::path corpus = dir / "corpus.h5", models = dir / "models.h5";
+  ASSERT_EQ(Csw("import" + files + " --markerset " + Q(sim / "markerset.json") + " -o " + Q(corpus), dir.path()).code,
+            0);
+  {
+    std::ifstream in(sim / "markerset.json");
+    json set = json::parse(in);
+    json names = json::array();
+    for (const auto& t : set["throat"]) names.push_back(t["marker"]);
+    set["throat"] = names;  // throat weights fitted, not read from the simulator
+    std::ofstream(dir / "set.json") << set.dump(2);
+  }
+  std::ofstream(dir / "config.json") << R"({"format": "csw-model-config", "version": 1, "markerset": "set.json"})";
+  const std::string fit = " --train '" + train + "' --config " + Q(dir / "config.json") + " -o " + Q(models);
+  const json face = RunJson("fit face " + Q(corpus) + fit, dir.path());
+  const json hand = RunJson("fit hand " + Q(corpus) + fit, dir.path());
+  ASSERT_TRUE(face.contains("face") && hand.contains("hand"));
+  EXPECT_EQ(hand["hand"]["parameters"].get<int>(), 20);  // the documented default
+  const json inv = RunJson("invert " + Q(corpus) + " --models " + Q(models) + " --hide 0.1", dir.path());
+  ASSERT_TRUE(inv.contains("face") && inv.contains("hand"));
+  const std::map<std::string, double> held_out_limit = {{"face", layout == "lab2" ? 1.1 * 0.322 : 0.322},
+                                                        {"hand", layout == "lab2" ? 1.1 * 1.362 : 1.362}};
+  for (const char* kind : {"face", "hand"}) {
+    SCOPED_TRACE(std::string(kind) + " on " + layout);
+    const json& hidden = inv[kind]["overall"]["hidden"];
+    ASSERT_GT(hidden["count"].get<int64_t>(), 0);
+    std::printf("%s %s: hidden mean %.3f p99 %.2f p99.9 %.2f max %.2f mm; visible held-out %.3f mm\n", layout.c_str(),
+                kind, Mean(hidden), hidden["p99_mm"].get<double>(), hidden["p99_9_mm"].get<double>(),
+                hidden["max_mm"].get<double>(), Mean(inv[kind]["held_out"]["visible"]));
+    if (testing::kSanitized) continue;
+    EXPECT_LE(hidden["p99_9_mm"].get<double>(), 5.0);
+    EXPECT_LE(hidden["max_mm"].get<double>(), 15.0);
+    EXPECT_LE(Mean(inv[kind]["held_out"]["visible"]), held_out_limit.at(kind));
+  }
+  if (layout == "lab2" && !testing::kSanitized) {
+    // The larynx markers follow the head's translation fully: weight 1 and a
+    // rotation offset (face_model.h); the default layout's blend keeps none.
+    for (const auto& t : face["face"]["throat"]) {
+      EXPECT_NEAR(t["head_weight"].get<double>(), 1.0, 0.02) << t["marker"];
+      const json& k = t["rotation_offset_mm"];
+      EXPECT_GT(std::hypot(k[0].get<double>(), k[1].get<double>(), k[2].get<double>()), 40.0) << t["marker"];
+    }
+  }
+}
+
+TEST(CliModels, HiddenSamplesWorstCasesDefaultLayout) { HiddenWorstCases("default"); }
+TEST(CliModels, HiddenSamplesWorstCasesLab2Layout) { HiddenWorstCases("lab2"); }
+
 // The virtual cuer with simulated truth: 18 sentences, the first third (6)
 // for training, the rest held out. Targets of issue 4: visible face ≤ 1 mm,
 // hand ≤ 2 mm, held-out ≤ 25 % above training, poses within 0.5° / 0.5 mm,

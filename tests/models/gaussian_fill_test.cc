@@ -109,6 +109,40 @@ TEST(GaussianFill, ConditionalMeanMatchesTheClosedForm) {
   EXPECT_EQ(filler.Fill(&all), 0);
 }
 
+// Predict(pattern, marker, markers) is the closed-form conditional mean of one
+// marker missing from the pattern, whatever the markers hold in the columns
+// the pattern does not see (the gap-edge correction predicts a frame with
+// another frame's pattern).
+TEST(GaussianFill, PredictWithAPatternIsTheConditionalMeanOfThatPattern) {
+  std::mt19937 rng(9);
+  const KnownNormal truth(rng);
+  GaussianFill fill;
+  fill.mean = truth.mean;
+  fill.covariance = truth.cov;
+  fill.ridge_mm2 = 0;
+  GaussianFiller filler(fill);
+  const Eigen::MatrixXd x = truth.Sample(1, rng);
+  Eigen::Matrix3Xd m = Eigen::Map<const Eigen::Matrix3Xd>(Eigen::VectorXd(x.row(0).transpose()).data(), 3, 3);
+  const std::vector<uint8_t> pattern = {1, 0, 0};  // marker 0 seen; 1 and 2 missing
+  // Closed form for marker 1 given marker 0: μ_1 + Σ_10 Σ_00⁻¹ (x_0 − μ_0).
+  const Eigen::Matrix3d s00 = truth.cov.block<3, 3>(0, 0), s10 = truth.cov.block<3, 3>(3, 0);
+  const Eigen::Vector3d expected =
+      truth.mean.segment<3>(3) + s10 * s00.inverse() * (m.col(0) - truth.mean.segment<3>(0));
+  EXPECT_LT((filler.Predict(pattern, 1, m) - expected).norm(), 1e-9);
+  // Columns the pattern does not see are not read.
+  m.col(2).setConstant(1e6);
+  EXPECT_LT((filler.Predict(pattern, 1, m) - expected).norm(), 1e-9);
+  // And it agrees with Fill for the same pattern.
+  Eigen::Matrix3Xd filled = m;
+  filled.col(1).setConstant(kNaN);
+  filled.col(2).setConstant(kNaN);
+  ASSERT_EQ(filler.Fill(&filled), 2);
+  EXPECT_LT((filled.col(1) - expected).norm(), 1e-9);
+  // A seen marker, or nothing seen: NaN.
+  EXPECT_TRUE(filler.Predict(pattern, 0, m).array().isNaN().all());
+  EXPECT_TRUE(filler.Predict({0, 0, 0}, 1, m).array().isNaN().all());
+}
+
 TEST(GaussianFill, BeatsCompleteCaseTrainingWhenHidingDependsOnThePosture) {
   // A marker hidden whenever it lies beyond a threshold (as a folded finger
   // hides behind the palm): complete frames alone never show that region,

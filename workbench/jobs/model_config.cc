@@ -137,7 +137,7 @@ ModelConfig ParseModelConfig(const std::string& text, const std::string& path) {
     const json& h = j["hand"];
     CheckKeys(h, {"angle_components", "ridge", "gaussian_fill"}, path, "hand");
     c.gaussian_fill = Get<bool>(h, "gaussian_fill", true, path, "hand");
-    c.angle_components = Get<int>(h, "angle_components", 12, path, "hand");
+    c.angle_components = Get<int>(h, "angle_components", HandModelOptions().angle_components, path, "hand");
     c.ridge = Get<double>(h, "ridge", 0.0, path, "hand");
     if (c.angle_components < 1) throw ConfigError(path, "hand.angle_components must be >= 1");
     if (c.ridge < 0) throw ConfigError(path, "hand.ridge must be >= 0");

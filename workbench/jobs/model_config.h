@@ -34,7 +34,7 @@ struct ModelConfig {
   std::vector<FaceStepSpec> face_steps;
   int throat_weight_rounds = 4;
   // hand
-  int angle_components = 12;
+  int angle_components = 20;  // HandModelOptions::angle_components
   double ridge = 0;
   bool gaussian_fill = true;
 };
