@@ -299,97 +299,100 @@ std::string MovementFitOptions::Check() const {
   if (!(target_tolerance_s > 0.0)) return "target_tolerance_s must be > 0";
   if (refinement_passes < 0 || refinement_passes > 10) return "refinement_passes must be in [0, 10]";
   if (!(lookahead_fraction > 0.0 && lookahead_fraction <= 1.0)) return "lookahead_fraction must be in (0, 1]";
+  if (!(onset_window_s >= 0.0)) return "onset_window_s must be >= 0";
+  if (!(max_time_sd_s > 0.0)) return "max_time_sd_s must be > 0";
   if (max_iterations < 1) return "max_iterations must be >= 1";
   return "";
 }
 
 namespace {
 
-// What an earlier pass measured of the neighbouring movements (k = 0: into the
-// previous target, k = 1: the next one).
-struct NeighbourHint {
-  bool known[2] = {false, false};
-  bool moved[2] = {true, true};
-  double onset[2] = {0.0, 0.0}, target[2] = {0.0, 0.0};
+// A window of the sequence: the rough targets of the gestures fitted together
+// (in order; `central` is the movement measured), the data stretch, and what an
+// earlier pass measured of the other gestures.
+struct Window {
+  std::vector<double> rough;  // rough target of each gesture in the window
+  int central = 1;
+  double data_start = 0.0, data_end = 0.0;
+  // Per gesture: estimate of an earlier pass (known), and whether it moved.
+  std::vector<bool> known, moved;
+  std::vector<double> onset, target;
 };
 
-MovementEstimate FitWindow(const SampledTrajectory& tr, double previous_target_s, double target_s, double next_target_s,
-                           const MovementFitOptions& o, const NeighbourHint& hint) {
-  if (std::string why = o.Check(); !why.empty()) throw InvalidInput("movement timing options: " + why);
-  if (!(previous_target_s < target_s && target_s < next_target_s))
-    throw InvalidInput("movement timing: the target times must increase (previous < target < next)");
+MovementEstimate FitWindow(const SampledTrajectory& tr, const Window& w, const MovementFitOptions& o) {
   MovementEstimate e;
-  // The data: from a little before the previous target (the end of the
-  // movement into it) to the middle of the next stretch (the start of the next
-  // movement), so that the movements two keys away stay out.
-  const double lookback = o.lookback_s;
-  const double data_end = target_s + o.lookahead_fraction * (next_target_s - target_s);
-  const int64_t first = FrameAtOrAfter(tr, previous_target_s - lookback);
-  const int64_t end = std::min(tr.frames(), FrameAtOrAfter(tr, data_end) + 1);
-  constexpr int kGestures = 3;
+  const int kg = static_cast<int>(w.rough.size());
+  const int c = w.central;
+  const int64_t first = FrameAtOrAfter(tr, w.data_start);
+  const int64_t end = std::min(tr.frames(), FrameAtOrAfter(tr, w.data_end) + 1);
   if (end - first < 12) {
     e.reason = "too few frames in the window";
     return e;
   }
-  GestureFit fit(tr, first, end, kGestures, o.path_terms);
+  GestureFit fit(tr, first, end, kg, o.path_terms);
   if (fit.count() < 4 * fit.columns()) {
     e.reason = "too few finite samples in the window";
     return e;
   }
   e.samples = fit.count();
-  // First guesses: each gesture's speed peak in its own stretch.
-  const double edges[kGestures + 1] = {previous_target_s - lookback, previous_target_s, target_s, data_end};
-  Eigen::VectorXd theta(2 * kGestures);
   const double tol = o.target_tolerance_s;
-  Bounds bounds{Eigen::VectorXd(2 * kGestures),
-                Eigen::VectorXd(2 * kGestures),
+  Bounds bounds{Eigen::VectorXd(2 * kg),
+                Eigen::VectorXd(2 * kg),
                 0.5 * o.min_duration_s,
-                std::vector<bool>(kGestures, true),
-                // Each gesture reaches its target within target_tolerance_s of
-                // its rough target and between the middles of the stretches
-                // around it.
-                {previous_target_s - tol, std::max(0.5 * (previous_target_s + target_s), target_s - tol),
-                 std::max(0.5 * (target_s + next_target_s), next_target_s - tol)},
-                {std::min(0.5 * (previous_target_s + target_s), previous_target_s + tol),
-                 std::min(0.5 * (target_s + next_target_s), target_s + tol), next_target_s + tol}};
-  for (int k = 0; k < kGestures; ++k) {
+                std::vector<bool>(static_cast<size_t>(kg), true),
+                std::vector<double>(static_cast<size_t>(kg)),
+                std::vector<double>(static_cast<size_t>(kg))};
+  Eigen::VectorXd theta(2 * kg);
+  for (int k = 0; k < kg; ++k) {
+    const auto ku = static_cast<size_t>(k);
+    // Each gesture reaches its target within target_tolerance_s of its rough
+    // target and between the middles of the stretches around it.
+    bounds.min_target[ku] =
+        k == 0 ? w.rough[ku] - tol : std::max(0.5 * (w.rough[ku - 1] + w.rough[ku]), w.rough[ku] - tol);
+    bounds.max_target[ku] =
+        k + 1 == kg ? w.rough[ku] + tol : std::min(0.5 * (w.rough[ku] + w.rough[ku + 1]), w.rough[ku] + tol);
+    // First guess: the gesture's speed peak in its own stretch.
+    const double from = k == 0 ? w.data_start : w.rough[ku - 1];
+    const double to = k + 1 == kg ? w.data_end : w.rough[ku];
     double onset, duration;
-    GuessGesture(tr, edges[k], edges[k + 1], o, &onset, &duration);
+    GuessGesture(tr, from, to, o, &onset, &duration);
     theta[2 * k] = onset;
     theta[2 * k + 1] = duration;
-    bounds.lo[2 * k] = std::min(onset, edges[k]) - o.max_shift_s;
-    bounds.hi[2 * k] = std::max(onset, edges[k]) + o.max_shift_s;
+    bounds.lo[2 * k] = std::min(onset, from) - o.max_shift_s;
+    bounds.hi[2 * k] = std::max(onset, from) + o.max_shift_s;
     bounds.lo[2 * k + 1] = o.min_duration_s;
     bounds.hi[2 * k + 1] = o.max_duration_s;
   }
-  // Neighbours measured by an earlier pass: start there, move little.
-  std::vector<bool> allowed(kGestures, true);
-  for (int h = 0; h < 2; ++h) {
-    if (!hint.known[h]) continue;
-    const int k = h == 0 ? 0 : 2;
+  // Gestures measured by an earlier pass: start there, move little.
+  std::vector<bool> allowed(static_cast<size_t>(kg), true);
+  for (int k = 0; k < kg; ++k) {
     const auto ku = static_cast<size_t>(k);
-    if (!hint.moved[h]) {
+    if (k == c || ku >= w.known.size() || !w.known[ku]) continue;
+    if (!w.moved[ku]) {
       allowed[ku] = false;
       continue;
     }
     constexpr double kNear = 0.03;
-    theta[2 * k] = hint.onset[h];
-    theta[2 * k + 1] = std::clamp(hint.target[h] - hint.onset[h], o.min_duration_s, o.max_duration_s);
-    bounds.lo[2 * k] = hint.onset[h] - kNear;
-    bounds.hi[2 * k] = hint.onset[h] + kNear;
-    bounds.min_target[ku] = hint.target[h] - kNear;
-    bounds.max_target[ku] = hint.target[h] + kNear;
+    theta[2 * k] = w.onset[ku];
+    theta[2 * k + 1] = std::clamp(w.target[ku] - w.onset[ku], o.min_duration_s, o.max_duration_s);
+    bounds.lo[2 * k] = w.onset[ku] - kNear;
+    bounds.hi[2 * k] = w.onset[ku] + kNear;
+    bounds.min_target[ku] = w.target[ku] - kNear;
+    bounds.max_target[ku] = w.target[ku] + kNear;
   }
   fit.SetActive(allowed);
   bounds.active = allowed;
   // Two starts for this movement: its speed peak, and the rough times.
   Eigen::VectorXd alt = theta;
-  alt[2] = previous_target_s;
-  alt[3] = std::clamp(target_s - previous_target_s, o.min_duration_s, o.max_duration_s);
+  const auto cu = static_cast<size_t>(c);
+  alt[2 * c] = w.rough[cu - 1];
+  alt[2 * c + 1] = std::clamp(w.rough[cu] - w.rough[cu - 1], o.min_duration_s, o.max_duration_s);
   e.converged = Minimise(fit, bounds, o.max_iterations, &theta);
   if (Minimise(fit, bounds, o.max_iterations, &alt) && fit.Cost(alt) < fit.Cost(theta)) theta = alt;
   // Model choice (BIC): keep a neighbouring gesture only when it explains the
   // data (a still neighbour would otherwise borrow part of this movement).
+  // Backward elimination: drop the neighbour whose removal lowers BIC most,
+  // while one does.
   const auto bic = [&](const GestureFit& f, const Eigen::VectorXd& th) {
     const double n = static_cast<double>(f.count());
     const double params = 2.0 * f.active_count() + f.dimensions() * static_cast<double>(f.columns());
@@ -397,35 +400,104 @@ MovementEstimate FitWindow(const SampledTrajectory& tr, double previous_target_s
   };
   double best = bic(fit, theta);
   std::vector<bool> best_active = allowed;
-  for (std::vector<bool> active : {std::vector<bool>{false, true, true}, std::vector<bool>{true, true, false},
-                                   std::vector<bool>{false, true, false}}) {
-    for (size_t k = 0; k < active.size(); ++k) active[k] = active[k] && allowed[k];
-    if (active == allowed) continue;
-    GestureFit reduced = fit;
-    reduced.SetActive(active);
-    Bounds b = bounds;
-    b.active = active;
-    Eigen::VectorXd th = theta;
-    const bool ok = Minimise(reduced, b, o.max_iterations, &th);
-    const double v = bic(reduced, th);
-    if (v < best) {
-      best = v;
-      best_active = active;
-      theta = th;
-      e.converged = ok;
+  for (bool improved = true; improved;) {
+    improved = false;
+    std::vector<bool> round_active = best_active;
+    Eigen::VectorXd round_theta = theta;
+    double round_best = best;
+    bool round_ok = e.converged;
+    for (int k = 0; k < kg; ++k) {
+      if (k == c || !best_active[static_cast<size_t>(k)]) continue;
+      std::vector<bool> active = best_active;
+      active[static_cast<size_t>(k)] = false;
+      GestureFit reduced = fit;
+      reduced.SetActive(active);
+      Bounds b = bounds;
+      b.active = active;
+      Eigen::VectorXd th = theta;
+      const bool ok = Minimise(reduced, b, o.max_iterations, &th);
+      const double v = bic(reduced, th);
+      if (v < round_best) {
+        round_best = v;
+        round_active = active;
+        round_theta = th;
+        round_ok = ok;
+      }
+    }
+    if (round_best < best) {
+      best = round_best;
+      best_active = round_active;
+      theta = round_theta;
+      e.converged = round_ok;
+      improved = true;
     }
   }
   fit.SetActive(best_active);
   Eigen::VectorXd r;
   const Eigen::MatrixXd beta = fit.Solve(theta, &r);
   e.fitted = true;
-  e.onset_s = theta[2];
-  e.target_s = theta[2] + theta[3];
-  e.amplitude = fit.Change(beta, 1).norm();
+  e.onset_s = theta[2 * c];
+  e.target_s = theta[2 * c] + theta[2 * c + 1];
+  e.amplitude = fit.Change(beta, c).norm();
   e.rms_residual = std::sqrt(r.squaredNorm() / std::max<double>(1.0, static_cast<double>(r.size())));
   e.moved = e.amplitude >= o.min_amplitude;
   if (!e.moved) e.reason = "no change";
+  // Standard errors of this movement's onset and target: the Gauss-Newton
+  // covariance of the active times (linear coefficients profiled out),
+  // sigma^2 (J^T J)^-1 with sigma^2 = residual / (n - parameters).
+  {
+    std::vector<int> params;
+    for (int k = 0; k < kg; ++k)
+      if (best_active[static_cast<size_t>(k)]) {
+        params.push_back(2 * k);
+        params.push_back(2 * k + 1);
+      }
+    const double h = 1e-4;
+    Eigen::MatrixXd jac(r.size(), static_cast<Eigen::Index>(params.size()));
+    for (size_t q = 0; q < params.size(); ++q) {
+      Eigen::VectorXd a = theta;
+      a[params[q]] += h;
+      Eigen::VectorXd ra;
+      fit.Solve(a, &ra);
+      jac.col(static_cast<Eigen::Index>(q)) = (ra - r) / h;
+    }
+    const double dof = static_cast<double>(r.size()) - static_cast<double>(params.size()) -
+                       static_cast<double>(fit.dimensions() * fit.columns());
+    const double sigma2 = r.squaredNorm() / std::max(1.0, dof);
+    Eigen::MatrixXd info = jac.transpose() * jac;
+    info.diagonal().array() += 1e-12 * std::max(1.0, info.diagonal().maxCoeff());
+    const Eigen::MatrixXd cov = sigma2 * info.ldlt().solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
+    int qc = 0;
+    for (size_t q = 0; q < params.size(); ++q)
+      if (params[q] == 2 * c) qc = static_cast<int>(q);
+    // target = onset + duration
+    e.onset_sd_s = std::sqrt(std::max(0.0, cov(qc, qc)));
+    e.target_sd_s = std::sqrt(std::max(0.0, cov(qc, qc) + cov(qc + 1, qc + 1) + 2.0 * cov(qc, qc + 1)));
+  }
+  if (e.moved && !(e.onset_sd_s <= o.max_time_sd_s && e.target_sd_s <= o.max_time_sd_s)) {
+    e.determined = false;
+    e.reason = "undetermined";
+  }
   return e;
+}
+
+void CheckTimes(const MovementFitOptions& o) {
+  if (std::string why = o.Check(); !why.empty()) throw InvalidInput("movement timing options: " + why);
+}
+
+// The window of movement i of a sequence of rough targets: from the gesture
+// into target i-1 (or an earlier one, so that the data reach back
+// onset_window_s before target i) to the next movement.
+Window SequenceWindow(const std::vector<double>& targets, size_t i, double next_target, const MovementFitOptions& o) {
+  Window w;
+  size_t j0 = i - 1;
+  while (j0 > 0 && targets[j0] > targets[i] - o.onset_window_s) --j0;
+  for (size_t j = j0; j <= i; ++j) w.rough.push_back(targets[j]);
+  w.rough.push_back(next_target);
+  w.central = static_cast<int>(i - j0);
+  w.data_start = targets[j0] - o.lookback_s;
+  w.data_end = targets[i] + o.lookahead_fraction * (next_target - targets[i]);
+  return w;
 }
 
 }  // namespace
@@ -433,13 +505,21 @@ MovementEstimate FitWindow(const SampledTrajectory& tr, double previous_target_s
 MovementEstimate EstimateMovement(const SampledTrajectory& tr, double previous_target_s, double target_s,
                                   double next_target_s, const MovementFitOptions& o) {
   CheckTrajectory(tr);
-  return FitWindow(tr, previous_target_s, target_s, next_target_s, o, NeighbourHint());
+  CheckTimes(o);
+  if (!(previous_target_s < target_s && target_s < next_target_s))
+    throw InvalidInput("movement timing: the target times must increase (previous < target < next)");
+  Window w;
+  w.rough = {previous_target_s, target_s, next_target_s};
+  w.central = 1;
+  w.data_start = previous_target_s - o.lookback_s;
+  w.data_end = target_s + o.lookahead_fraction * (next_target_s - target_s);
+  return FitWindow(tr, w, o);
 }
 
 std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& tr, const std::vector<double>& targets,
                                                 const MovementFitOptions& o) {
   CheckTrajectory(tr);
-  if (std::string why = o.Check(); !why.empty()) throw InvalidInput("movement timing options: " + why);
+  CheckTimes(o);
   for (size_t i = 1; i < targets.size(); ++i)
     if (!(targets[i] > targets[i - 1])) throw InvalidInput("movement timing: the target times must increase");
   std::vector<MovementEstimate> out(targets.size());
@@ -447,23 +527,30 @@ std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& tr, con
   const auto next_of = [&](size_t i) {
     return i + 1 < targets.size() ? targets[i + 1] : targets[i] + (targets[i] - targets[i - 1]);
   };
-  for (size_t i = 1; i < targets.size(); ++i) out[i] = EstimateMovement(tr, targets[i - 1], targets[i], next_of(i), o);
-  // Second pass: each movement again, its neighbours started from (and kept
-  // near) their own first-pass estimates, where each was the central movement
-  // of its window (block coordinate descent on the whole sequence).
+  for (size_t i = 1; i < targets.size(); ++i) out[i] = FitWindow(tr, SequenceWindow(targets, i, next_of(i), o), o);
+  // Further passes: each movement again, the other gestures of its window
+  // started from (and kept near) their own estimates of the previous pass,
+  // where each was the central movement of its window (block coordinate
+  // descent on the whole sequence).
   for (int pass = 0; pass < o.refinement_passes; ++pass) {
     std::vector<MovementEstimate> refined = out;
     for (size_t i = 1; i < targets.size(); ++i) {
-      NeighbourHint hint;
-      for (int h = 0; h < 2; ++h) {
-        const size_t j = h == 0 ? i - 1 : i + 1;
-        if (j < 1 || j >= out.size() || !out[j].fitted) continue;
-        hint.known[h] = true;
-        hint.moved[h] = out[j].moved;
-        hint.onset[h] = out[j].onset_s;
-        hint.target[h] = out[j].target_s;
+      Window w = SequenceWindow(targets, i, next_of(i), o);
+      const size_t j0 = i - static_cast<size_t>(w.central);
+      const size_t kg = w.rough.size();
+      w.known.assign(kg, false);
+      w.moved.assign(kg, true);
+      w.onset.assign(kg, 0.0);
+      w.target.assign(kg, 0.0);
+      for (size_t k = 0; k < kg; ++k) {
+        const size_t j = j0 + k;
+        if (j == i || j < 1 || j >= out.size() || !out[j].fitted) continue;
+        w.known[k] = true;
+        w.moved[k] = out[j].moved;
+        w.onset[k] = out[j].onset_s;
+        w.target[k] = out[j].target_s;
       }
-      refined[i] = FitWindow(tr, targets[i - 1], targets[i], next_of(i), o, hint);
+      refined[i] = FitWindow(tr, w, o);
     }
     out = refined;
   }

@@ -20,6 +20,7 @@
 // Pure computation: no files; bad options throw csw::InvalidInput.
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,18 @@ struct MovementFitOptions {
   // started from their own estimates.
   int refinement_passes = 1;
   double lookahead_fraction = 0.5;
+  // EstimateMovements: the window of movement i reaches back at least this far
+  // before its rough target (gestures into the earlier targets of that stretch
+  // are fitted with it), so that an early onset lies inside the data. Movements
+  // of overlapping keys often start 200-400 ms before the previous target.
+  // Off by default: on the virtual cuer it did not lower the placement-onset
+  // bias and made the 3-term shape fits ten times slower
+  // (docs/analysis-phasing.md).
+  double onset_window_s = 0.0;
+  // Quality gate: a moved estimate whose onset or target standard error
+  // (MovementEstimate::onset_sd_s, target_sd_s) exceeds this is flagged
+  // determined = false (reason "undetermined"). Infinity = no gate.
+  double max_time_sd_s = std::numeric_limits<double>::infinity();
   std::string Check() const;  // "" when valid, else the reason
 };
 
@@ -61,10 +74,20 @@ struct MovementEstimate {
   bool fitted = false;     // false when the window holds too few samples
   bool moved = false;      // fitted and amplitude >= min_amplitude
   bool converged = false;  // the Levenberg-Marquardt steps became negligible
+  // false when moved but the onset or target standard error exceeds
+  // MovementFitOptions::max_time_sd_s (reason "undetermined"): overlapping
+  // gestures can trade parts of their movements and the data fit equally well.
+  bool determined = true;
+  bool Usable() const { return moved && determined; }
   double onset_s = 0.0;    // movement start (same clock as the trajectory)
   double target_s = 0.0;   // movement end (target reached)
   double amplitude = 0.0;  // |x(after) − x(before)| of this gesture, feature units
   double rms_residual = 0.0;
+  // Standard errors of onset_s and target_s (s) from the fit's curvature: large
+  // when overlapping gestures can trade parts of their movements (the data do
+  // not determine the onset). NaN when not fitted.
+  double onset_sd_s = std::numeric_limits<double>::quiet_NaN();
+  double target_sd_s = std::numeric_limits<double>::quiet_NaN();
   int64_t samples = 0;  // finite values used (frames × dimensions)
   std::string reason;   // why not fitted / not moved ("" otherwise)
 };

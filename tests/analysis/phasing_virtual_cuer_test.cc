@@ -93,7 +93,8 @@ int LongestFinger(int shape) { return shape == 1 || shape == 6 ? 1 : 2; }
 
 struct Tally {
   std::vector<double> onset_ms, target_ms;
-  int missed = 0;  // changed component not reported as moved
+  int missed = 0;        // changed component not reported as moved
+  int undetermined = 0;  // moved, but onset or target standard error above the gate
 };
 using Key4 = std::tuple<KeyType, Component>;
 
@@ -134,6 +135,10 @@ void Measure(const VirtualCuer& cuer, const std::string& name, const std::string
   MovementFitOptions shape_options, placement_options;
   shape_options.path_terms = 3;
   placement_options.path_terms = 1;
+  // As csw phasing: placement onsets or targets with a standard error above
+  // 8 ms are undetermined (overlapping gestures trading parts of their
+  // movements) and left out, counted.
+  placement_options.max_time_sd_s = 0.008;
   // Shape movements of every key first (the rough targets: the true ones
   // jittered, as labels or posterior peaks would give them).
   std::vector<double> shape_truth(n), placement_truth(n);
@@ -184,6 +189,10 @@ void Measure(const VirtualCuer& cuer, const std::string& name, const std::string
         ++t.missed;
         continue;
       }
+      if (!e.determined) {
+        ++t.undetermined;
+        continue;
+      }
       const KeyTiming& truth = r.keys[i].timing;
       const double start = c == Component::kPlacement ? truth.placement_start_s : truth.shape_start_s;
       t.onset_ms.push_back(1000.0 * (e.onset_s - start));
@@ -211,12 +220,11 @@ PhasingModel Synchronous() {
 }
 
 // Runs `sentences` takes (the shipped list, cycled with new take names, so new
-// timing draws) and checks the mean errors.
-// Placement onsets do NOT meet the 15 ms yet: over 100 sentences they
-// come out +14.6 (default), +21.3 (shifted) and -4.2 ms (synchronous) for CV
-// keys, -2.2, +24.3 and +5.9 ms for lone-V keys (docs/analysis-phasing.md,
-// "Limits"); the bound here is the one they meet, 30 ms.
-constexpr double kPlacementOnsetBoundMs = 30.0;
+// timing draws) and checks the mean errors. Placement onsets and targets whose
+// standard error exceeds 8 ms are left out as undetermined (as csw phasing
+// does): before that gate the placement onsets came out +12 to +21 ms late on
+// average (docs/analysis-phasing.md). The >= 100-sentence acceptance runs
+// through the job: tests/phasing_job/phasing_acceptance_test.cc.
 
 // check_v: also hold lone-V keys to the bound (about 0.5 per sentence: only
 // the 100-sentence runs have enough of them for a mean within a few ms).
@@ -238,9 +246,10 @@ void Check(const PhasingModel& model, const char* label, int sentences, double b
       const Tally& t = res.tallies[{type, c}];
       const TimeSummary on = SummariseTimes(t.onset_ms), tg = SummariseTimes(t.target_ms);
       std::printf(
-          "[phasing]   %-2s %-9s n=%3d missed=%d onset error %+6.1f ms (sd %5.1f)  target error %+6.1f ms (sd %5.1f)\n",
-          KeyTypeLabel(type), c == Component::kShape ? "shape" : "placement", on.count, t.missed, on.mean_ms, on.sd_ms,
-          tg.mean_ms, tg.sd_ms);
+          "[phasing]   %-2s %-9s n=%3d missed=%d undetermined=%d onset error %+6.1f ms (sd %5.1f)  target error %+6.1f "
+          "ms (sd %5.1f)\n",
+          KeyTypeLabel(type), c == Component::kShape ? "shape" : "placement", on.count, t.missed, t.undetermined,
+          on.mean_ms, on.sd_ms, tg.mean_ms, tg.sd_ms);
       if (type == KeyType::kConsonantAlone) continue;  // reported only
       if (type == KeyType::kVowelAlone && !check_v) continue;
       if (csw::testing::kSanitized) {
@@ -253,10 +262,12 @@ void Check(const PhasingModel& model, const char* label, int sentences, double b
         continue;
       }
       if (on.count < 10) continue;
-      const double onset_bound = c == Component::kPlacement ? kPlacementOnsetBoundMs : bound_ms;
-      EXPECT_LT(std::abs(on.mean_ms), onset_bound) << label << " " << KeyTypeLabel(type);
+      EXPECT_LT(std::abs(on.mean_ms), bound_ms) << label << " " << KeyTypeLabel(type);
       EXPECT_LT(std::abs(tg.mean_ms), bound_ms) << label << " " << KeyTypeLabel(type);
-      EXPECT_LE(t.missed, on.count / 10) << "changed components reported as still (at most 10 %)";
+      EXPECT_LE(t.missed, (on.count + t.undetermined) / 10) << "changed components reported as still (at most 10 %)";
+      // The gate leaves out at most 60 % of the moved placement changes (about
+      // 45-55 % measured: docs/analysis-phasing.md).
+      EXPECT_LE(t.undetermined, 3 * (on.count + t.undetermined) / 5) << label << " " << KeyTypeLabel(type);
     }
 }
 
@@ -272,12 +283,6 @@ TEST(PhasingVirtualCuer, KinematicTimesMatchTheTruthShiftedTiming) {
 
 TEST(PhasingVirtualCuer, KinematicTimesMatchTheTruthSynchronousTiming) {
   Check(Synchronous(), "synchronous", csw::testing::kSanitized ? 3 : 30, kBoundMs, false);
-}
-
-TEST(PhasingVirtualCuer, AcceptanceKinematicPhasingOver100Sentences) {
-  for (const auto& [model, label] : {std::pair{PhasingModel(), "default"}, std::pair{Shifted(0.070), "shifted+70ms"},
-                                     std::pair{Synchronous(), "synchronous"}})
-    Check(model, label, 100, kBoundMs, true);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "workbench/jobs/phasing_job.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -43,6 +44,10 @@ std::string PhasingOptions::Check() const {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Changes whose rough target is within this of a neighbouring key's are left
+// out of the kinematic statistics (the key is only approached).
+constexpr double kApproachedS = 0.05;
+constexpr double kMaxPlacementTimeSdS = 0.008;
 
 const LabelTier* FindTier(const std::vector<LabelTier>& tiers, const std::string& name) {
   for (const LabelTier& t : tiers)
@@ -179,6 +184,12 @@ json Phasing(const PhasingOptions& options, Progress& progress) {
   bool any_truth = false;
   phasing::MovementFitOptions placement_fit, shape_fit;
   shape_fit.path_terms = 3;  // distances are nonlinear in the joint angles: curved paths (docs/analysis-phasing.md)
+  // Placement onsets of overlapping keys are often not determined by the data
+  // (neighbouring gestures trade parts of their movements with the same
+  // residual): those whose onset or target standard error exceeds 8 ms are
+  // left out and counted ("undetermined"; docs/analysis-phasing.md).
+  placement_fit.max_time_sd_s = kMaxPlacementTimeSdS;
+  json left_out = {{"placement", json::object()}, {"shape", json::object()}};
   for (size_t i = 0; i < ranges.size(); ++i) {
     const TakeRange& range = ranges[i];
     progress.Update("phasing: " + range.take, static_cast<double>(i) / static_cast<double>(ranges.size()));
@@ -245,11 +256,86 @@ json Phasing(const PhasingOptions& options, Progress& progress) {
     if (!options.truth.empty()) truth = ReadTruth(options.truth, range.take, cue_keys, &truth_why);
     any_truth = any_truth || truth.has_value();
 
-    const phasing::SampledTrajectory shape_traj{&features.distances, rate, 0.0};
-    const phasing::SampledTrajectory index_traj{&features.index_tip, rate, 0.0};
-    const phasing::SampledTrajectory middle_traj{&features.middle_tip, rate, 0.0};
+    // Kinematic landmarks, over the whole take at once (EstimateMovements: each
+    // movement fitted with its neighbours, then refitted with the neighbours
+    // started from their own estimates). Rough target times must increase:
+    // a key whose rough target is not 30 ms after the previous key's is moved
+    // there (overlapping keys can reverse their targets), and changes whose
+    // rough target is within kApproachedS of a neighbour's (keys only
+    // approached when syllables follow fast) are left out of the statistics.
+    const size_t nk = cue_keys.size();
+    auto increasing = [&](const std::vector<int64_t>& frames) {
+      std::vector<double> t(nk);
+      for (size_t k = 0; k < nk; ++k) {
+        t[k] = Time(frames[k], rate);
+        if (k > 0) t[k] = std::max(t[k], t[k - 1] + 0.03);
+      }
+      return t;
+    };
+    const std::vector<double> shape_rough = increasing(shape_frames), placement_rough = increasing(placement_frames);
+    auto approached = [&](const std::vector<double>& rough, size_t k) {
+      return rough[k] < rough[k - 1] + kApproachedS || (k + 1 < nk && rough[k + 1] < rough[k] + kApproachedS);
+    };
+    std::vector<phasing::MovementEstimate> shape_est(nk), placement_est(nk);
+    if (nk >= 2) {
+      const phasing::SampledTrajectory shape_traj{&features.distances, rate, 0.0};
+      shape_est = phasing::EstimateMovements(shape_traj, shape_rough, shape_fit);
+      // Placement point: the tip of the longest extended finger (the key model's
+      // layout says which finger each shape extends furthest), blended from one
+      // finger to the other over each measured shape movement that changes it
+      // (minimum-jerk weight from its onset to its target): without the blend
+      // the switch of finger is a shape-timed jump of the placement path.
+      const Eigen::MatrixXd& index_tip = features.index_tip;
+      const Eigen::MatrixXd& middle_tip = features.middle_tip;
+      Eigen::MatrixXd placement_point = middle_tip;
+      for (int64_t f = 0; f < placement_point.rows(); ++f) {
+        const double t = Time(f, rate);
+        double w = model.IndexFinger(cue_keys[0].shape) ? 1.0 : 0.0;
+        for (size_t k = 1; k < nk; ++k) {
+          const double dw = (model.IndexFinger(cue_keys[k].shape) ? 1.0 : 0.0) -
+                            (model.IndexFinger(cue_keys[k - 1].shape) ? 1.0 : 0.0);
+          if (dw == 0.0) continue;
+          const bool ok = shape_est[k].fitted;
+          const double on = ok ? shape_est[k].onset_s : shape_rough[k - 1];
+          const double tg = ok ? shape_est[k].target_s : shape_rough[k];
+          const double tau = std::clamp((t - on) / std::max(tg - on, 1e-3), 0.0, 1.0);
+          w += dw * tau * tau * tau * (10.0 - 15.0 * tau + 6.0 * tau * tau);
+        }
+        if (w >= 1.0)
+          placement_point.row(f) = index_tip.row(f);
+        else if (w > 0.0)
+          placement_point.row(f) = (1.0 - w) * middle_tip.row(f) + w * index_tip.row(f);
+      }
+      const phasing::SampledTrajectory placement_traj{&placement_point, rate, 0.0};
+      placement_est = phasing::EstimateMovements(placement_traj, placement_rough, placement_fit);
+    }
+    // Why changed components got no kinematic landmarks.
+    auto tally = [&](const char* component, const char* why) {
+      left_out[component][why] = left_out[component].value(why, 0) + 1;
+    };
+    auto use = [&](const phasing::MovementEstimate& m, const std::vector<double>& rough, size_t k,
+                   const char* component) {
+      if (approached(rough, k)) {
+        tally(component, "approached");
+        return false;
+      }
+      if (!m.fitted) {
+        tally(component, "not_fitted");
+        return false;
+      }
+      if (!m.moved) {
+        tally(component, "no_change");
+        return false;
+      }
+      if (!m.determined) {
+        tally(component, "undetermined");
+        return false;
+      }
+      tally(component, "measured");
+      return true;
+    };
     int measured = 0;
-    for (size_t k = 1; k < cue_keys.size(); ++k) {
+    for (size_t k = 1; k < nk; ++k) {
       const Key& key = cue_keys[k];
       if (key.type == KeyType::kRest) continue;
       phasing::PhasingKeyRow row;
@@ -260,27 +346,22 @@ json Phasing(const PhasingOptions& options, Progress& progress) {
       row.a1_s = key.a1_s;
       row.vowel_onset_s = phasing::VowelOnset(key, cued.mapped.phones);
       if (truth) row.truth = (*truth)[k];
-      const size_t kn = k + 1 < cue_keys.size() ? k + 1 : k;
+      const size_t kn = k + 1 < nk ? k + 1 : k;
       const double end_s = take.duration_s();
       auto next_time = [&](int64_t frame, double cur_s) {
         const double t = Time(frame, rate);
         return t > cur_s + 1e-6 ? t : std::min(end_s, cur_s + 0.3);
       };
-      // Placement: the tip of the key's longest extended finger.
       if (cue_keys[k - 1].placement != key.placement) {
-        const bool index = model.IndexFinger(key.shape);
+        if (use(placement_est[k], placement_rough, k, "placement")) {
+          row.kinematic.placement_start_s = placement_est[k].onset_s;
+          row.kinematic.placement_target_s = placement_est[k].target_s;
+        }
         const double p0 = Time(placement_frames[k - 1], rate), p1 = Time(placement_frames[k], rate);
         const double p2 = next_time(placement_frames[kn], p1);
-        if (p0 < p1 && p1 < p2) {
-          const phasing::MovementEstimate m =
-              phasing::EstimateMovement(index ? index_traj : middle_traj, p0, p1, p2, placement_fit);
-          if (m.moved) {
-            row.kinematic.placement_start_s = m.onset_s;
-            row.kinematic.placement_target_s = m.target_s;
-          }
-        }
         const phasing::PosteriorLandmarks pl =
-            phasing::FindPosteriorLandmarks(post.placement, rate, 0.0, key.placement, p0, p2);
+            p0 < p1 && p1 < p2 ? phasing::FindPosteriorLandmarks(post.placement, rate, 0.0, key.placement, p0, p2)
+                               : phasing::PosteriorLandmarks{};
         if (pl.found) {
           row.posterior.placement_start_s = pl.onset_s;
           row.posterior.placement_target_s = pl.target_s;
@@ -289,17 +370,15 @@ json Phasing(const PhasingOptions& options, Progress& progress) {
         row.truth.placement_start_s = row.truth.placement_target_s = kNaN;
       }
       if (cue_keys[k - 1].shape != key.shape) {
+        if (use(shape_est[k], shape_rough, k, "shape")) {
+          row.kinematic.shape_start_s = shape_est[k].onset_s;
+          row.kinematic.shape_target_s = shape_est[k].target_s;
+        }
         const double s0 = Time(shape_frames[k - 1], rate), s1 = Time(shape_frames[k], rate);
         const double s2 = next_time(shape_frames[kn], s1);
-        if (s0 < s1 && s1 < s2) {
-          const phasing::MovementEstimate m = phasing::EstimateMovement(shape_traj, s0, s1, s2, shape_fit);
-          if (m.moved) {
-            row.kinematic.shape_start_s = m.onset_s;
-            row.kinematic.shape_target_s = m.target_s;
-          }
-        }
         const phasing::PosteriorLandmarks pl =
-            phasing::FindPosteriorLandmarks(post.shape, rate, 0.0, key.shape, s0, s2);
+            s0 < s1 && s1 < s2 ? phasing::FindPosteriorLandmarks(post.shape, rate, 0.0, key.shape, s0, s2)
+                               : phasing::PosteriorLandmarks{};
         if (pl.found) {
           row.posterior.shape_start_s = pl.onset_s;
           row.posterior.shape_target_s = pl.target_s;
@@ -388,6 +467,7 @@ json Phasing(const PhasingOptions& options, Progress& progress) {
     }
     result["figures"] = figure_files;
   }
+  result["kinematic_changes"] = left_out;
   result["keys_measured"] = rows.size();
   return result;
 }
@@ -423,6 +503,16 @@ std::string PhasingText(const json& r) {
           o << "  " << method << " " << type << " " << c << ": onset " << line(s["onset"]) << "; target "
             << line(s["target"]) << "\n";
         }
+  }
+  if (r.contains("kinematic_changes")) {
+    o << "kinematic landmarks of the changed components:";
+    for (const char* c : {"placement", "shape"}) {
+      o << " " << c;
+      const json& t = r["kinematic_changes"][c];
+      if (t.empty()) o << " none";
+      for (const auto& [why, n] : t.items()) o << " " << why << " " << n.get<int64_t>();
+      o << (std::string(c) == "placement" ? ";" : "\n");
+    }
   }
   if (r.contains("csv")) o << "per-key CSV: " << r["csv"].get<std::string>() << "\n";
   if (r.contains("figures"))

@@ -8,12 +8,17 @@
 //      when their codes follow the cued keys, else the expected keys aligned
 //      to the gestural score (aligned decoding, less accurate: ~90 ms);
 //   3. per key, its shape gesture (the seven distances) and its placement
-//      gesture (the tip of its longest extended finger in the head frame)
-//      measured two ways: kinematic (a superposed minimum-jerk fit of the
-//      movement from the previous key's target, analysis/phasing/movement_timing.h)
-//      and posterior (onset when the key's class starts to dominate, target at
-//      its posterior peak); successions where the component does not change
-//      are left out;
+//      gesture (the tip of its longest extended finger in the head frame,
+//      blended from one finger to the other over each measured shape movement
+//      that changes the finger) measured two ways: kinematic (superposed
+//      minimum-jerk fits of every movement of the take with its neighbours,
+//      shapes first, analysis/phasing/movement_timing.h EstimateMovements) and
+//      posterior (onset when the key's class starts to dominate, target at its
+//      posterior peak); successions where the component does not change are
+//      left out, and so are, for the kinematic statistics, changes whose rough
+//      target is within 50 ms of a neighbour's (only approached) and placement
+//      estimates whose onset or target standard error exceeds 8 ms
+//      ("undetermined"), all counted in "kinematic_changes";
 //   4. times relative to A1 (consonant onset for CV and lone-C keys, vowel
 //      onset for lone-V keys) and to the vowel onset, per key type (CV, V, C):
 //      mean, sd, 95 % confidence interval, count.
@@ -55,6 +60,8 @@ struct PhasingOptions {
 //  "target": {...}}, "shape": {...}}, "V": {...}, "C": {...}}, "posterior": {same},
 //  "relative_to_vowel_onset": {"kinematic": {...}, "posterior": {...}},
 //  "truth": {...} (with --truth: the true times' summary), "errors_vs_truth": {...},
+//  "kinematic_changes": {"placement": {"measured", "undetermined", "approached",
+//  "no_change", "not_fitted": counts}, "shape": {...}},
 //  "csv", "figures"}
 nlohmann::json Phasing(const PhasingOptions& options, Progress& progress);
 std::string PhasingText(const nlohmann::json& result);
