@@ -150,12 +150,14 @@ TEST(PhasingJob, KinematicTimesFollowTheTruthAndTheCsvHasOneRowPerKey) {
     EXPECT_EQ(take["rough_targets"], "labels") << take.dump();
   }
   // CV keys, kinematic estimates minus the truth, measured on these six
-  // sentences (2026-12-02, rough targets from the label tiers): shape onset
-  // -5.0 ms, shape target -0.9 ms, placement target -11.6 ms, placement onset
-  // +46.2 ms (sd 86 ms over 31 keys: the 15 ms bar is NOT met for the
-  // placement onset; docs/analysis-phasing.md says why). Limits just above.
+  // sentences (2026-12-02, rough targets from the label tiers, after the
+  // phasing fit's standard-error gate): shape onset -0.9 ms, shape target
+  // -2.4 ms (36 keys), placement onset +16.8 ms (sd 39), placement target
+  // -9.2 ms (17 keys; before the gate +46.2 ms at onset). Six sentences are
+  // too few for the 15 ms bar on the placement onset: the 100-sentence
+  // acceptance test (tests/phasing_job) holds it. Limits just above.
   const std::map<std::string, double> limit_ms{
-      {"shape onset", 15}, {"shape target", 15}, {"placement target", 20}, {"placement onset", 60}};
+      {"shape onset", 10}, {"shape target", 10}, {"placement target", 15}, {"placement onset", 30}};
   for (const char* c : {"placement", "shape"})
     for (const char* l : {"onset", "target"}) {
       const json& e = r["errors_vs_truth"]["kinematic"]["CV"][c][l];
