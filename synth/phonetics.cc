@@ -377,14 +377,10 @@ Utterance Phonetise(const std::string& text, const PhonetiseOptions& options) {
       add_phone("", g.name, g.start, end, -1);
       continue;
     }
-    if (IsEspeakLinking(g.name)) {  // not a phoneme: its time goes to the phone before
-      if (u.phones.empty()) {
-        add_phone("", g.name, g.start, end, -1);
-      } else if (end > g.start) {
-        Phone& last = u.phones.back();
-        last.end_s = end / rate;
-        if (last.word >= 0) u.words[last.word].end_s = last.end_s;
-      }
+    if (IsEspeakLinking(g.name)) {
+      // Not a phoneme (phonetics.h): kept as its own phone ";" with espeak-ng's
+      // timing, in neither LfPC table, so transparent to CueKeys; no warning.
+      add_phone(g.name, g.name, g.start, end, g.raw_word);
       continue;
     }
     std::vector<std::string> ipa = EspeakToIpaPhones(g.name);

@@ -63,8 +63,11 @@ bool IsEspeakPause(const std::string& espeak_name);
 // espeak-ng's linking phoneme ";" (phsource/phonemes: "linking j ... used
 // between (i) vowels and a following vowel"; in French it appears between a
 // word-final [i] and a vowel-initial word: "bougie ; éclaire", "il y ; a"): a
-// transitional glide, not a phoneme of the words, so not cued. Phonetise
-// drops it and gives its time to the phone before it.
+// transitional glide, not a phoneme of the words, so not cued. Phonetise keeps
+// it as its own phone with ipa ";" and espeak-ng's timing (the audio has the
+// glide there; the phones of the virtual cuer's corpora stay as they were),
+// which CueKeys passes over (in neither LfPC table) and csw cue reads as
+// nothing (phone_symbols.h); it is not reported as an unmapped name.
 bool IsEspeakLinking(const std::string& espeak_name);
 
 // The one place where espeak-ng's output is corrected towards the phonemes
