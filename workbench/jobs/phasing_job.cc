@@ -23,6 +23,7 @@
 #include "workbench/jobs/figures.h"
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/take_data.h"
+#include "workbench/jobs/tier_util.h"
 #include "workbench/jobs/take_selection.h"
 
 namespace csw::jobs {
@@ -49,18 +50,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // out of the kinematic statistics (the key is only approached).
 constexpr double kApproachedS = 0.05;
 constexpr double kMaxPlacementTimeSdS = 0.008;
-
-const LabelTier* FindTier(const std::vector<LabelTier>& tiers, const std::string& name) {
-  for (const LabelTier& t : tiers)
-    if (t.name == name) return &t;
-  return nullptr;
-}
-
-std::string TierNames(const std::vector<LabelTier>& tiers) {
-  std::string s;
-  for (const LabelTier& t : tiers) s += (s.empty() ? "'" : ", '") + t.name + "'";
-  return s.empty() ? "none" : s;
-}
 
 // The true gesture times of a simulated take (<dir>/<take>.truth.json), matched
 // to the cued keys by position when both sequences have the same codes; else
