@@ -23,8 +23,8 @@
 #include "workbench/jobs/figures.h"
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/take_data.h"
-#include "workbench/jobs/tier_util.h"
 #include "workbench/jobs/take_selection.h"
+#include "workbench/jobs/tier_util.h"
 
 namespace csw::jobs {
 
