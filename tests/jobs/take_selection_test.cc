@@ -80,8 +80,15 @@ TEST(TakeSelection, GlobPatterns) {
   EXPECT_EQ(Select({"sentence_0[36]"}), (std::vector<Sel>{{"sentence_03", 0, 10}, {"sentence_06", 0, 10}}));
   // A range applies to every match.
   EXPECT_EQ(Select({"h00?@:10%"}), (std::vector<Sel>{{"h001", 0, 10}, {"h002", 0, 20}}));
-  // A pattern naming .filled also matches fill versions.
+  // A pattern naming .filled also matches fill versions; so does any pattern
+  // that mentions "fill" (what a user types to mean them).
   EXPECT_EQ(Select({"h001.filled*"}), (std::vector<Sel>{{"h001.filled", 0, 100}, {"h001.filled-2", 0, 100}}));
+  EXPECT_EQ(Select({"h001*filled"}), (std::vector<Sel>{{"h001.filled", 0, 100}}));
+  EXPECT_EQ(Select({"h001.fill*"}), (std::vector<Sel>{{"h001.filled", 0, 100}, {"h001.filled-2", 0, 100}}));
+  // A pattern that matches only fill versions without saying so names them.
+  EXPECT_EQ(ErrorOf({"h001?*"}),
+            "corpus.h5: no take matches the pattern 'h001?*' (2 generated fill version(s) do: patterns without "
+            "\"fill\" skip them)");
   // '*' alone: every take but the generated fill versions.
   EXPECT_EQ(Select({"*"}).size(), kTakes.size() - 2);
 }

@@ -283,15 +283,24 @@ std::vector<TakeRange> SelectTakes(const std::vector<TakeInfo>& takes, const std
       add(*it, EscapeTakeName(it->name) + range_suffix, &item);
       continue;
     }
-    const bool wants_fills = text.find(".filled") != std::string::npos;
-    size_t matched = 0;
+    // A pattern that mentions "fill" ('*.filled', '*filled', 'x.fill*') is
+    // after fill versions; the others skip them.
+    const bool wants_fills = text.find("fill") != std::string::npos;
+    size_t matched = 0, skipped = 0;
     for (const TakeInfo& t : takes) {
       if (!item.Matches(t.name)) continue;
-      if (!wants_fills && IsGeneratedFillVersion(t.name, names)) continue;
+      if (!wants_fills && IsGeneratedFillVersion(t.name, names)) {
+        ++skipped;
+        continue;
+      }
       ++matched;
       add(t, EscapeTakeName(t.name) + range_suffix, &item);
     }
-    if (matched == 0) throw InvalidInput(prefix + "no take matches the pattern '" + text + "'");
+    if (matched == 0)
+      throw InvalidInput(prefix + "no take matches the pattern '" + text + "'" +
+                         (skipped > 0 ? " (" + std::to_string(skipped) +
+                                            " generated fill version(s) do: patterns without \"fill\" skip them)"
+                                      : std::string()));
   }
   if (out.empty()) throw InvalidInput(prefix + "no take to use");
   return out;
