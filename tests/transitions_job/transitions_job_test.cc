@@ -7,9 +7,12 @@
 
 #include <array>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 
 #include "core/error.h"
+#include "tests/testing/testing.h"
 #include "workbench/jobs/job_util.h"
 
 namespace csw::jobs {
@@ -184,6 +187,34 @@ TEST(TransitionsJob, RecoversAKnownPlaneAndReportsIt) {
   EXPECT_NE(text.find("0011"), std::string::npos) << text;
   EXPECT_NE(text.find("best (lowest cross-validated error): surface"), std::string::npos) << text;
 }
+
+#ifdef CSW_FIGURES_MODULE_FILE
+TEST(TransitionsJob, DrawsTheDurationFigure) {
+  ::setenv("CSW_FIGURES_MODULE", CSW_FIGURES_MODULE_FILE, 1);
+  testing::TempDir dir;
+  std::vector<Take> takes;
+  std::vector<std::array<double, 3>> truth;
+  for (int i = 0; i < 3; ++i)
+    takes.push_back(PlaneTake("t" + std::to_string(i), 8, 20u + static_cast<uint32_t>(i), &truth));
+  TransitionsOptions o;
+  o.corpus = "in-memory";
+  o.figures = (dir.path() / "figures").string();
+  Progress progress;
+  const nlohmann::json r = AnalyseTransitions(takes, o, progress);
+  ASSERT_EQ(r["figures"].size(), 1u);
+  // A PNG of a real size: four panels of points and lines (tens of kB; an
+  // empty canvas compresses to a few kB).
+  const std::filesystem::path png = r["figures"][0].get<std::string>();
+  std::ifstream in(png, std::ios::binary);
+  unsigned char h[24] = {};
+  in.read(reinterpret_cast<char*>(h), 24);
+  EXPECT_EQ(std::string(reinterpret_cast<char*>(h) + 1, 3), "PNG");
+  const int width = (h[16] << 24) | (h[17] << 16) | (h[18] << 8) | h[19];
+  EXPECT_GE(width, 900);
+  EXPECT_GT(std::filesystem::file_size(png), 20000u);
+  ::unsetenv("CSW_FIGURES_MODULE");
+}
+#endif
 
 }  // namespace
 }  // namespace csw::jobs

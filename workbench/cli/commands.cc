@@ -594,6 +594,7 @@ class TransitionsCommand : public Command {
         ->capture_default_str();
     sub_->add_option("-o,--output", options_.output, "Save the fitted models (JSON)");
     sub_->add_option("--csv", options_.csv, "Write one row per transition");
+    sub_->add_option("--figures", options_.figures, "Folder for the figure transitions.png");
     sub_->add_flag("--json", json_, "Print the report as JSON");
   }
   int Run(Progress& progress) override {

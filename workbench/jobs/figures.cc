@@ -128,4 +128,9 @@ void SaveConfusionMatrix(const std::string& path, const std::string& title, cons
   Check(Api().save_confusion_matrix(path, title, labels, counts, true_axis, recognised_axis));
 }
 
+void SavePlots(const std::string& path, const std::string& title, const std::vector<report::PlotPanel>& panels,
+               int columns) {
+  Check(Api().save_plots(path, title, panels, columns));
+}
+
 }  // namespace csw::jobs::figures

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/file_util.h"
 #include "io/corpus/corpus.h"
+#include "workbench/jobs/figures.h"
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/take_data.h"
 #include "workbench/jobs/take_selection.h"
@@ -272,6 +273,70 @@ json AnalyseTransitions(const std::vector<Take>& takes, const TransitionsOptions
   result["models"] = models;
   result["best"] = best.empty() ? json(nullptr) : json(best);
   result["fitted"] = fitted;
+  if (!options.figures.empty()) {
+    progress.Update("transitions: figures", 1.0);
+    figures::Require();
+    std::filesystem::create_directories(options.figures);
+    using report::PlotSeries;
+    report::PlotPanel fig7{"Duration against the mean normalised distance (the seed's Fig. 7)",
+                           "mean of the normalised geodesic and Euclidean distances",
+                           "duration (s)",
+                           {},
+                           {}};
+    report::PlotPanel euclid{"Duration against the Euclidean distance",
+                             "mean Euclidean distance (" + options.length_unit + ")",
+                             "duration (s)",
+                             {},
+                             {}};
+    report::PlotPanel geo{
+        "Duration against the geodesic distance", "mean geodesic distance (rad)", "duration (s)", {}, {}};
+    report::PlotPanel fit{"Predicted against measured (fitted on every transition)",
+                          "measured duration (s)",
+                          "predicted duration (s)",
+                          {},
+                          {}};
+    PlotSeries points{"transitions", {}, {}, PlotSeries::Style::kPoints, 0};
+    PlotSeries pe = points, pg = points;
+    double n_lo = 0, n_hi = 0, d_lo = 0, d_hi = 0;
+    for (size_t i = 0; i < all.size(); ++i) {
+      const signing::Transition& t = all[i];
+      points.x.push_back(t.normalised);
+      points.y.push_back(t.duration_s);
+      pe.x.push_back(t.euclidean);
+      pe.y.push_back(t.duration_s);
+      pg.x.push_back(t.geodesic);
+      pg.y.push_back(t.duration_s);
+      n_lo = i == 0 ? t.normalised : std::min(n_lo, t.normalised);
+      n_hi = i == 0 ? t.normalised : std::max(n_hi, t.normalised);
+      d_lo = i == 0 ? t.duration_s : std::min(d_lo, t.duration_s);
+      d_hi = i == 0 ? t.duration_s : std::max(d_hi, t.duration_s);
+    }
+    fig7.series.push_back(points);
+    euclid.series.push_back(pe);
+    geo.series.push_back(pg);
+    int colour = 1;
+    for (const json& fj : result["fitted"]) {
+      const signing::DurationModel m = signing::DurationModel::FromJson(fj);
+      if (m.kind == signing::DurationModelKind::kLinear) {
+        fig7.series.push_back({"LINEAR",
+                               {n_lo, n_hi},
+                               {m.intercept + m.slope * n_lo, m.intercept + m.slope * n_hi},
+                               PlotSeries::Style::kLine,
+                               3});
+      }
+      PlotSeries s{std::string(signing::DurationModelName(m.kind)), {}, {}, PlotSeries::Style::kPoints, colour++};
+      for (const signing::Transition& t : all) {
+        s.x.push_back(t.duration_s);
+        s.y.push_back(m.Predict(t));
+      }
+      fit.series.push_back(s);
+    }
+    fit.series.push_back({"measured = predicted", {d_lo, d_hi}, {d_lo, d_hi}, PlotSeries::Style::kDashed, 7});
+    const std::string png = (std::filesystem::path(options.figures) / "transitions.png").string();
+    figures::SavePlots(png, "Transitions: " + std::to_string(all.size()) + " from " + options.corpus,
+                       {fig7, fit, euclid, geo}, 2);
+    result["figures"] = json::array({png});
+  }
   if (transitions_out != nullptr) *transitions_out = std::move(all);
   return result;
 }
@@ -389,6 +454,9 @@ std::string TransitionsText(const json& r) {
   if (!r["best"].is_null()) o << "best (lowest cross-validated error): " << r["best"].get<std::string>() << "\n";
   if (r.contains("output")) o << "models: " << r["output"].get<std::string>() << "\n";
   if (r.contains("csv")) o << "per-transition CSV: " << r["csv"].get<std::string>() << "\n";
+  if (r.contains("figures")) {
+    for (const json& f : r["figures"]) o << "figure: " << f.get<std::string>() << "\n";
+  }
   return o.str();
 }
 

@@ -36,8 +36,9 @@ struct TransitionsOptions {
   int folds = 5;  // cross-validation folds (fewer transitions than folds: leave-one-out)
   signing::DurationModelOptions model;
   signing::TransitionOptions transition;
-  std::string output;  // JSON file for the fitted models ("" = none)
-  std::string csv;     // one row per transition ("" = none)
+  std::string output;   // JSON file for the fitted models ("" = none)
+  std::string csv;      // one row per transition ("" = none)
+  std::string figures;  // folder for transitions.png (durations against the distances, predicted against measured)
   std::string Check() const;
 };
 
@@ -56,7 +57,7 @@ nlohmann::json AnalyseTransitions(const std::vector<Take>& takes, const Transiti
 // {"corpus", "takes": [{"take", "tiers": [{"tier", "wrist", "joints", "transitions"}]}],
 //  "transitions", "length_unit", "per_type": [{"type", "count", "mean_s", "sd_s"}],
 //  "distances": {"geodesic": {"min", "mean", "max"}, "euclidean": {...}},
-//  "models": [{"model", "fit": {...}, "training_mae_s", "cv_mae_s"}], "best", "folds", "output", "csv"}
+//  "models": [{"model", "fit": {...}, "training_mae_s", "cv_mae_s"}], "best", "folds", "output", "csv", "figures"}
 nlohmann::json Transitions(const TransitionsOptions& options, Progress& progress);
 std::string TransitionsText(const nlohmann::json& result);
 

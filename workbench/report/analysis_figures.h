@@ -59,4 +59,30 @@ void SaveConfusionMatrix(const std::string& path, const std::string& title, cons
                          const std::vector<std::vector<int>>& counts, const std::string& true_axis = "true class",
                          const std::string& recognised_axis = "recognised class");
 
+// One series of an x-y panel: a line, dashed line or points, with its legend
+// name ("" = not in the legend). Points with a NaN coordinate are left out
+// (lines break there).
+struct PlotSeries {
+  enum class Style { kLine, kDashed, kPoints };
+  std::string name;
+  std::vector<double> x, y;
+  Style style = Style::kLine;
+  int colour = -1;  // index in the qualitative palette; -1 = the series' order in its panel
+};
+
+// One panel of SavePlots: series, optional vertical marks (thin dashed grey
+// lines at these x, e.g. boundaries), axis labels.
+struct PlotPanel {
+  std::string title;
+  std::string x_label, y_label;
+  std::vector<PlotSeries> series;
+  std::vector<double> vertical_marks;
+};
+
+// A grid of x-y panels (`columns` per row; 0 = up to two) with one legend of
+// every named series. InvalidInput: no panel, a series whose x and y differ in
+// length, an infinite coordinate, a panel with no finite point.
+void SavePlots(const std::string& path, const std::string& title, const std::vector<PlotPanel>& panels,
+               int columns = 0);
+
 }  // namespace csw::report

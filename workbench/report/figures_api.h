@@ -14,7 +14,7 @@
 
 namespace csw::report {
 
-inline constexpr int kFiguresApiVersion = 3;
+inline constexpr int kFiguresApiVersion = 4;
 
 struct FiguresApi {
   int version = kFiguresApiVersion;
@@ -45,6 +45,9 @@ struct FiguresApi {
                                        const std::vector<std::string>& labels,
                                        const std::vector<std::vector<int>>& counts, const std::string& true_axis,
                                        const std::string& recognised_axis) = nullptr;
+  // Version 4: x-y panels (analysis_figures.h, SavePlots).
+  std::string (*save_plots)(const std::string& path, const std::string& title, const std::vector<PlotPanel>& panels,
+                            int columns) = nullptr;
 };
 
 }  // namespace csw::report

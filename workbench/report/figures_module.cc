@@ -71,6 +71,11 @@ std::string SaveConfusionMatrix(const std::string& path, const std::string& titl
   return Guarded([&] { csw::report::SaveConfusionMatrix(path, title, labels, counts, true_axis, recognised_axis); });
 }
 
+std::string SavePlots(const std::string& path, const std::string& title,
+                      const std::vector<csw::report::PlotPanel>& panels, int columns) {
+  return Guarded([&] { csw::report::SavePlots(path, title, panels, columns); });
+}
+
 }  // namespace
 
 extern "C" __attribute__((visibility("default"))) const csw::report::FiguresApi* csw_figures_api() {
@@ -82,6 +87,7 @@ extern "C" __attribute__((visibility("default"))) const csw::report::FiguresApi*
                                            &SaveGapFill,
                                            &SaveGesturalScore,
                                            &SaveHistograms,
-                                           &SaveConfusionMatrix};
+                                           &SaveConfusionMatrix,
+                                           &SavePlots};
   return &api;
 }
