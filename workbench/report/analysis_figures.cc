@@ -412,6 +412,9 @@ void SavePlots(const std::string& path, const std::string& title, const std::vec
       }
     }
     if (!any) throw InvalidInput(path + ": panel '" + p.title + "' has no point to draw");
+    if (std::isfinite(p.y_min) && std::isfinite(p.y_max) && !(p.y_max > p.y_min)) {
+      throw InvalidInput(path + ": panel '" + p.title + "': y_max must be above y_min");
+    }
   }
   EnsureGuiApplication();
   const int n = static_cast<int>(panels.size());
@@ -464,7 +467,12 @@ void SavePlots(const std::string& path, const std::string& title, const std::vec
       }
     }
     const double x_pad = x_hi > x_lo ? 0.03 * (x_hi - x_lo) : 1.0;
-    const double y_pad = y_hi > y_lo ? 0.08 * (y_hi - y_lo) : 1.0;
+    double y_pad = y_hi > y_lo ? 0.08 * (y_hi - y_lo) : 1.0;
+    if (std::isfinite(p.y_min) && std::isfinite(p.y_max)) {
+      y_lo = p.y_min;
+      y_hi = p.y_max;
+      y_pad = 0;
+    }
     rect->axis(QCPAxis::atBottom)->setRange(x_lo - x_pad, x_hi + x_pad);
     rect->axis(QCPAxis::atLeft)->setRange(y_lo - y_pad, y_hi + y_pad);
     rect->axis(QCPAxis::atBottom)->setLabel(Q(p.x_label));

@@ -77,11 +77,15 @@ struct PlotPanel {
   std::string x_label, y_label;
   std::vector<PlotSeries> series;
   std::vector<double> vertical_marks;
+  // The y range; NaN (default) = from the data.
+  double y_min = std::numeric_limits<double>::quiet_NaN();
+  double y_max = std::numeric_limits<double>::quiet_NaN();
 };
 
 // A grid of x-y panels (`columns` per row; 0 = up to two) with one legend of
 // every named series. InvalidInput: no panel, a series whose x and y differ in
-// length, an infinite coordinate, a panel with no finite point.
+// length, an infinite coordinate, a panel with no finite point, a given y
+// range with y_max <= y_min.
 void SavePlots(const std::string& path, const std::string& title, const std::vector<PlotPanel>& panels,
                int columns = 0);
 
