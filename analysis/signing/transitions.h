@@ -33,9 +33,10 @@ struct TransitionOptions {
   // with an empty label between two signs is one too (Praat fills the gaps of
   // an interval tier with empty intervals), and so is an unlabelled gap.
   std::vector<std::string> transition_labels = {"transition", "trans", "t", "tr"};
-  // Labels (case-insensitive) of rests: a rest between two signs means no
-  // transition is measured there.
-  std::vector<std::string> rest_labels = {"rest", "#", "_", "sil", "pause"};
+  // Labels (case-insensitive) of rests and of the movements from and to a
+  // rest: one of them between two signs means no transition is measured there.
+  std::vector<std::string> rest_labels = {"rest",        "#",          "_",    "sil", "pause",
+                                          "preparation", "retraction", "prep", "retr"};
   // A gap between two signs longer than this is a pause, not a transition (s).
   double max_transition_s = 1.5;
   // Euclidean distances and linear speeds are reported in this many mm per

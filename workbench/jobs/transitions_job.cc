@@ -180,14 +180,16 @@ json AnalyseTransitions(const std::vector<Take>& takes, const TransitionsOptions
     const LabelTier* types = options.types.empty() ? nullptr : FindTier(take.tiers, options.types);
     json tj = {{"take", take.name}, {"tiers", json::array()}, {"types_tier", types != nullptr}};
     std::map<std::string, int> wrist_of;  // per hand tier the take has
-    for (const std::string& name : options.tiers) {
-      if (FindTier(take.tiers, name) != nullptr) wrist_of[name] = WristFor(take, name, options);
+    if (options.joints == "arm") {
+      for (const std::string& name : options.tiers) {
+        if (FindTier(take.tiers, name) != nullptr) wrist_of[name] = WristFor(take, name, options);
+      }
     }
     for (const std::string& name : options.tiers) {
       const LabelTier* tier = FindTier(take.tiers, name);
       if (tier == nullptr) continue;
       ++tiers_found;
-      const int wrist = wrist_of[name];
+      const int wrist = options.joints == "arm" ? wrist_of[name] : -1;
       std::vector<int> joints;
       if (options.joints == "all") {
         for (int j = 0; j < static_cast<int>(take.skeleton.size()); ++j) joints.push_back(j);
@@ -207,10 +209,11 @@ json AnalyseTransitions(const std::vector<Take>& takes, const TransitionsOptions
         joints = signing::ArmJoints(take.skeleton, wrist, other);
       }
       std::vector<signing::Transition> ts = signing::ExtractTransitions(take, *tier, types, joints, topt);
-      tj["tiers"].push_back({{"tier", name},
-                             {"wrist", take.skeleton[static_cast<size_t>(wrist)].name},
-                             {"joints", joints.size()},
-                             {"transitions", ts.size()}});
+      tj["tiers"].push_back(
+          {{"tier", name},
+           {"wrist", wrist >= 0 ? json(take.skeleton[static_cast<size_t>(wrist)].name) : json(nullptr)},
+           {"joints", joints.size()},
+           {"transitions", ts.size()}});
       all.insert(all.end(), ts.begin(), ts.end());
     }
     result["takes"].push_back(tj);
@@ -410,8 +413,8 @@ std::string TransitionsText(const json& r) {
   for (const json& t : r["takes"]) {
     o << "  " << t["take"].get<std::string>() << ":";
     for (const json& tier : t["tiers"]) {
-      o << " " << tier["tier"].get<std::string>() << " " << tier["transitions"].get<int>() << " (wrist "
-        << tier["wrist"].get<std::string>() << ")";
+      o << " " << tier["tier"].get<std::string>() << " " << tier["transitions"].get<int>();
+      if (!tier["wrist"].is_null()) o << " (wrist " << tier["wrist"].get<std::string>() << ")";
     }
     o << "\n";
   }
