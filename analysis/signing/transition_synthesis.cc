@@ -162,6 +162,74 @@ size_t RetrieveOccurrence(const std::vector<Clip>& candidates, const Clip* previ
   return best;
 }
 
+std::vector<size_t> RetrieveSequence(const std::vector<std::vector<Clip>>& candidates, double length_unit_mm) {
+  const size_t n = candidates.size();
+  for (size_t i = 0; i < n; ++i) {
+    if (candidates[i].empty())
+      throw InvalidInput("motion retrieval: sign " + std::to_string(i + 1) + " has no occurrence");
+  }
+  if (n == 0) return {};
+  // cost[i][k]: the least summed boundary distance of signs 0..i ending with occurrence k.
+  std::vector<std::vector<double>> cost(n);
+  std::vector<std::vector<size_t>> back(n);
+  cost[0].assign(candidates[0].size(), 0.0);
+  back[0].assign(candidates[0].size(), 0);
+  for (size_t i = 1; i < n; ++i) {
+    cost[i].assign(candidates[i].size(), std::numeric_limits<double>::infinity());
+    back[i].assign(candidates[i].size(), 0);
+    for (size_t k = 0; k < candidates[i].size(); ++k) {
+      for (size_t p = 0; p < candidates[i - 1].size(); ++p) {
+        const Clip& prev = candidates[i - 1][p];
+        const double c = cost[i - 1][p] + PostureDistance(prev, prev.frames - 1, candidates[i][k], 0, length_unit_mm);
+        if (c < cost[i][k]) {
+          cost[i][k] = c;
+          back[i][k] = p;
+        }
+      }
+    }
+  }
+  std::vector<size_t> out(n);
+  out[n - 1] = static_cast<size_t>(std::min_element(cost[n - 1].begin(), cost[n - 1].end()) - cost[n - 1].begin());
+  for (size_t i = n - 1; i > 0; --i) out[i - 1] = back[i][out[i]];
+  return out;
+}
+
+Transition MeasureBetween(const Clip& from, const Clip& to, const std::vector<int>& joints, double length_unit_mm) {
+  CheckCompatible(from, to, "transition measure");
+  std::vector<int> js = joints;
+  if (js.empty()) {
+    for (int j = 0; j < from.joints; ++j) js.push_back(j);
+  }
+  Transition t;
+  double e = 0, g = 0;
+  for (int j : js) {
+    if (j < 0 || j >= from.joints) throw InvalidInput("transition measure: joint index outside the clips");
+    e += (from.position(from.frames - 1, j) - to.position(0, j)).norm();
+    g += GeodesicDistance(from.orientation(from.frames - 1, j), to.orientation(0, j));
+  }
+  const auto nj = static_cast<double>(js.size());
+  t.euclidean = e / nj / length_unit_mm;
+  t.geodesic = g / nj;
+  t.joints_used = static_cast<int>(js.size());
+  auto speeds = [&](const Clip& c, double* v, double* w) {
+    double sv = 0, sw = 0;
+    int64_t count = 0;
+    for (int64_t f = 0; f + 1 < c.frames; ++f) {
+      for (int j : js) {
+        sv += (c.position(f + 1, j) - c.position(f, j)).norm();
+        sw += GeodesicDistance(c.orientation(f, j), c.orientation(f + 1, j));
+        ++count;
+      }
+    }
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    *v = count > 0 ? sv / static_cast<double>(count) * c.rate_hz / length_unit_mm : nan;
+    *w = count > 0 ? sw / static_cast<double>(count) * c.rate_hz : nan;
+  };
+  speeds(from, &t.from_speed, &t.from_angular_speed);
+  speeds(to, &t.to_speed, &t.to_angular_speed);
+  return t;
+}
+
 void CompareClips(const Clip& a, const Clip& b, double* mean_position_error_mm, double* mean_geodesic_error) {
   if (a.frames != b.frames || a.joints != b.joints) {
     throw InvalidInput("comparing clips of " + std::to_string(a.frames) + " and " + std::to_string(b.frames) +

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "analysis/signing/duration_models.h"
+#include "analysis/signing/transitions.h"
 #include "core/take.h"
 
 namespace csw::signing {
@@ -73,6 +74,19 @@ double PostureDistance(const Clip& a, int64_t frame_a, const Clip& b, int64_t fr
 // to `previous`'s last posture plus whose last posture is closest to `next`'s
 // first (either may be null). Throws InvalidInput when there is no candidate.
 size_t RetrieveOccurrence(const std::vector<Clip>& candidates, const Clip* previous, const Clip* next,
+                          double length_unit_mm = 1000.0);
+
+// Motion retrieval for a whole sequence: candidates[i] are the occurrences of
+// the i-th sign; returns one index per sign minimising the sum over
+// consecutive signs of PostureDistance(last posture of sign i, first posture
+// of sign i + 1) (dynamic programming). Throws InvalidInput when a sign has no
+// candidate.
+std::vector<size_t> RetrieveSequence(const std::vector<std::vector<Clip>>& candidates, double length_unit_mm = 1000.0);
+
+// The transition between the last posture of `from` and the first of `to` as
+// the duration models see it: distances over `joints` (every joint when
+// empty), the clips' mean speeds as the signs' speeds; duration 0.
+Transition MeasureBetween(const Clip& from, const Clip& to, const std::vector<int>& joints,
                           double length_unit_mm = 1000.0);
 
 // Mean over frames and joints of the position error (mm) between two clips of

@@ -114,3 +114,32 @@ TEST(SigningSynthesis, RetrievalPicksTheOccurrenceClosestToItsNeighbours) {
 
 }  // namespace
 }  // namespace csw::signing
+
+namespace csw::signing {
+namespace {
+
+TEST(SigningSynthesis, SequenceRetrievalMinimisesTheSummedBoundaryDistances) {
+  // Sign 1: occurrences ending at x 0 or 100; sign 2: starting at 90 (ending 10) or at 5 (ending 500);
+  // sign 3: starting at 20 or 480. Greedy from sign 1's first occurrence picks 0 → 5 → 480 (5 + 20 = 25 mm);
+  // the best chain is 100 → 90 → 20 (10 + 10 = 20 mm).
+  auto still = [](double x0, double x1) {
+    Clip c;
+    c.rate_hz = 100;
+    c.frames = 2;
+    c.joints = 1;
+    c.positions = {Eigen::Vector3d(x0, 0, 0), Eigen::Vector3d(x1, 0, 0)};
+    c.orientations = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};
+    return c;
+  };
+  const std::vector<std::vector<Clip>> candidates = {
+      {still(-50, 0), still(-50, 100)}, {still(90, 10), still(5, 500)}, {still(20, 0), still(480, 0)}};
+  EXPECT_EQ(RetrieveSequence(candidates), (std::vector<size_t>{1, 0, 0}));
+  EXPECT_THROW(RetrieveSequence({{still(0, 0)}, {}}), InvalidInput);
+  const Transition t = MeasureBetween(still(0, 100), still(400, 0), {}, 1000.0);
+  EXPECT_NEAR(t.euclidean, 0.3, 1e-12);
+  EXPECT_NEAR(t.geodesic, 0.0, 1e-12);
+  EXPECT_NEAR(t.from_speed, 10.0, 1e-9);  // 100 mm in one frame at 100 Hz = 10 m/s
+}
+
+}  // namespace
+}  // namespace csw::signing
