@@ -787,6 +787,34 @@ std::string FormatBvh(const Take& take, const BvhWriteOptions& options) {
   return out;
 }
 
+double SkeletonPositionMismatchMm(const Take& take) {
+  const int64_t joints = static_cast<int64_t>(take.skeleton.size());
+  if (take.markers.markers() != joints || take.orientations.joints() != joints ||
+      take.orientations.frames() != take.markers.frames()) {
+    throw InvalidInput("SkeletonPositionMismatchMm: take '" + take.name +
+                       "' has markers, orientations and skeleton of different sizes");
+  }
+  double worst = 0.0;
+  for (int64_t f = 0; f < take.markers.frames(); ++f) {
+    for (int64_t j = 0; j < joints; ++j) {
+      const SkeletonJoint& s = take.skeleton[static_cast<size_t>(j)];
+      if (s.parent < 0 || s.parent >= j) continue;
+      bool has_position = false;
+      for (const std::string& c : s.channels) has_position = has_position || ChannelCode(c) < 3;
+      if (has_position) continue;
+      const float* p = take.markers.at(f, j);
+      const float* pp = take.markers.at(f, s.parent);
+      const float* q = take.orientations.at(f, s.parent);
+      if (IsMissing(p[0]) || IsMissing(pp[0]) || IsMissing(q[0])) continue;
+      const Eigen::Quaterniond qp = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized();
+      const Eigen::Vector3d expected =
+          Eigen::Vector3d(pp[0], pp[1], pp[2]) + qp * Eigen::Vector3d(s.offset_mm[0], s.offset_mm[1], s.offset_mm[2]);
+      worst = std::max(worst, (expected - Eigen::Vector3d(p[0], p[1], p[2])).norm());
+    }
+  }
+  return worst;
+}
+
 void WriteBvh(const std::string& path, const Take& take, const BvhWriteOptions& options) {
   const std::string out = FormatBvh(take, options);
   std::ofstream file(path, std::ios::binary | std::ios::trunc);

@@ -348,6 +348,19 @@ TEST(BvhWrite, HandWorkedChainWritesItsAngles) {
   EXPECT_NE(text.find("CHANNELS 3 Yrotation Xrotation Zrotation"), std::string::npos);
 }
 
+// A take read from a file is consistent; moving a joint off its bone shows.
+TEST(BvhWrite, PositionMismatchOfHandBuiltTakes) {
+  Take take = ParseText(RandomBvh(5, 20), "cm");
+  EXPECT_LT(SkeletonPositionMismatchMm(take), 1e-3);
+  // Marker 3 is J1 (R0, J0, J1, ...), a 3-channel joint: 5 mm off along x.
+  ASSERT_EQ(take.marker_names[2], "J1");
+  take.markers.at(7, 2)[0] += 5.0f;
+  // Its own bone is 5 mm off; its child J2 has position channels (not checked).
+  EXPECT_NEAR(SkeletonPositionMismatchMm(take), 5.0, 1e-3);
+  take.orientations.Resize(1, 1);
+  EXPECT_THROW(SkeletonPositionMismatchMm(take), InvalidInput);
+}
+
 TEST(BvhWrite, RefusesTakesItCannotWrite) {
   Take none;
   none.rate_hz = 100;
