@@ -19,6 +19,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <set>
 #include <system_error>
@@ -406,6 +407,111 @@ std::vector<std::string> PadTo(std::vector<std::string> v, size_t n) {
   return v;
 }
 
+// The skeleton of a take as the JSON text of the `skeleton` attribute of
+// `orientations` (docs/corpus-format.md).
+std::string SkeletonJson(const std::vector<SkeletonJoint>& skeleton) {
+  nlohmann::json joints = nlohmann::json::array();
+  for (const SkeletonJoint& j : skeleton) {
+    joints.push_back({{"name", j.name},
+                      {"parent", j.parent},
+                      {"offset_mm", {j.offset_mm[0], j.offset_mm[1], j.offset_mm[2]}},
+                      {"channels", j.channels},
+                      {"end_site", j.end_site}});
+  }
+  return joints.dump();
+}
+
+std::vector<SkeletonJoint> ParseSkeletonJson(const std::string& text, const Where& where, const std::string& object) {
+  std::vector<SkeletonJoint> out;
+  try {
+    const nlohmann::json joints = nlohmann::json::parse(text);
+    if (!joints.is_array()) throw Damaged(where, object + ": the skeleton attribute is not a JSON array");
+    for (const nlohmann::json& j : joints) {
+      SkeletonJoint s;
+      s.name = j.at("name").get<std::string>();
+      s.parent = j.at("parent").get<int>();
+      const nlohmann::json& o = j.at("offset_mm");
+      if (!o.is_array() || o.size() != 3) throw Damaged(where, object + ": a skeleton offset_mm is not 3 numbers");
+      for (int k = 0; k < 3; ++k) s.offset_mm[k] = o[static_cast<size_t>(k)].get<double>();
+      s.channels = j.at("channels").get<std::vector<std::string>>();
+      s.end_site = j.at("end_site").get<bool>();
+      if (s.parent < -1 || s.parent >= static_cast<int>(out.size())) {
+        throw Damaged(where, object + ": skeleton joint '" + s.name + "' has parent " + std::to_string(s.parent) +
+                                 " (parents must come first)");
+      }
+      out.push_back(std::move(s));
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw Damaged(where, object + ": the skeleton attribute is not valid skeleton JSON (" + e.what() + ")");
+  }
+  return out;
+}
+
+// Creates the extendible orientations dataset [0][joints][4] (chunks of
+// kCorpusChunkFrames frames, shuffle + deflate, fill NaN).
+Handle CreateOrientations(hid_t loc, int64_t joints, const Where& where, const std::string& object) {
+  hsize_t dims[3] = {0, static_cast<hsize_t>(joints), 4};
+  hsize_t maxdims[3] = {H5S_UNLIMITED, static_cast<hsize_t>(joints), 4};
+  hsize_t chunk[3] = {static_cast<hsize_t>(kCorpusChunkFrames), static_cast<hsize_t>(std::max<int64_t>(1, joints)), 4};
+  Handle space = h5::Own(H5Screate_simple(3, dims, maxdims), H5Sclose, where, "cannot create", object);
+  Handle dcpl = h5::Own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, where, "cannot create", object);
+  h5::Check(H5Pset_chunk(dcpl.get(), 3, chunk), where, "cannot chunk", object);
+  h5::Check(H5Pset_shuffle(dcpl.get()), where, "cannot set the shuffle filter of", object);
+  h5::Check(H5Pset_deflate(dcpl.get(), kCorpusDeflateLevel), where, "cannot set the deflate filter of", object);
+  float fill = kMissing;
+  h5::Check(H5Pset_fill_value(dcpl.get(), H5T_NATIVE_FLOAT, &fill), where, "cannot set the fill value of", object);
+  return h5::Own(H5Dcreate2(loc, "orientations", H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                 H5Dclose, where, "cannot create", object);
+}
+
+// Appends frames × joints × 4 floats at the end of the orientations dataset.
+void AppendOrientationFrames(hid_t dataset, int64_t old_frames, int64_t frames, int64_t joints, const float* data,
+                             const Where& where, const std::string& object) {
+  if (frames == 0) return;
+  hsize_t new_dims[3] = {static_cast<hsize_t>(old_frames + frames), static_cast<hsize_t>(joints), 4};
+  h5::Check(H5Dset_extent(dataset, new_dims), where, "cannot extend", object);
+  if (joints == 0) return;
+  Handle fspace = h5::Own(H5Dget_space(dataset), H5Sclose, where, "cannot write", object);
+  hsize_t start[3] = {static_cast<hsize_t>(old_frames), 0, 0};
+  hsize_t cnt[3] = {static_cast<hsize_t>(frames), static_cast<hsize_t>(joints), 4};
+  h5::Check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, cnt, nullptr), where, "cannot select",
+            object);
+  Handle mspace = h5::Own(H5Screate_simple(3, cnt, nullptr), H5Sclose, where, "cannot write", object);
+  h5::Check(H5Dwrite(dataset, H5T_NATIVE_FLOAT, mspace.get(), fspace.get(), H5P_DEFAULT, data), where, "cannot write",
+            object);
+}
+
+// Reads a take's skeleton and orientations (the `orientations` member) into t,
+// whose markers are already loaded.
+void ReadOrientations(hid_t take_group, Take* t, const Where& where, const std::string& obj) {
+  const std::string oobj = obj + "/orientations";
+  Handle ds = h5::OpenDataset(take_group, "orientations", where, oobj);
+  std::vector<hsize_t> dims = h5::Shape(ds.get(), where, oobj);
+  if (dims.size() != 3 || dims[2] != 4) throw Damaged(where, oobj + " is not a [frames][joints][4] array");
+  const int64_t frames = static_cast<int64_t>(dims[0]);
+  const int64_t joints = static_cast<int64_t>(dims[1]);
+  if (joints != t->markers.markers() || frames != t->markers.frames()) {
+    throw Damaged(where, oobj + " has " + std::to_string(frames) + " frames x " + std::to_string(joints) +
+                             " joints but markers has " + std::to_string(t->markers.frames()) + " frames x " +
+                             std::to_string(t->markers.markers()) + " markers");
+  }
+  std::optional<std::string> json = h5::ReadAttrString(ds.get(), "skeleton", where, oobj);
+  if (!json) throw Damaged(where, oobj + " has no skeleton attribute");
+  t->skeleton = ParseSkeletonJson(*json, where, oobj);
+  if (static_cast<int64_t>(t->skeleton.size()) != joints) {
+    throw Damaged(where, oobj + ": the skeleton has " + std::to_string(t->skeleton.size()) + " joints but the array " +
+                             std::to_string(joints));
+  }
+  if (joints > 0 && frames > kMaxLoadFloats / (joints * 4)) {
+    throw Damaged(where, oobj + " is too large to load at once");
+  }
+  t->orientations.Resize(frames, joints);
+  if (frames > 0 && joints > 0) {
+    h5::Check(H5Dread(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, t->orientations.data().data()), where,
+              "cannot read", oobj);
+  }
+}
+
 void WriteEvents(hid_t take_group, const std::vector<Event>& events, const Where& where, const std::string& obj) {
   const std::string eobj = obj + "/events";
   Handle g = h5::CreateGroup(take_group, "events", where, eobj);
@@ -707,6 +813,7 @@ Take ReadTake(hid_t file, const std::string& name, const Where& where) {
     t.markers.Resize(shape.frames, shape.markers);
     ReadMarkerRange(markers.get(), 0, shape.frames, shape.markers, t.markers.data().data(), where, obj + "/markers");
   }
+  if (h5::LinkExists(g.get(), "orientations")) ReadOrientations(g.get(), &t, where, obj);
   if (h5::LinkExists(g.get(), "analog")) {
     const std::string aobj = obj + "/analog";
     Handle a = h5::OpenGroup(g.get(), "analog", where, aobj);
@@ -1039,7 +1146,7 @@ struct TakeEntry {
   std::vector<std::string> tier_names;
   // Files, as the links name them (relative to the corpus folder).
   std::string data_file;
-  std::vector<std::string> data_members;  // links into data_file: markers, marker_names, analog, events, provenance
+  std::vector<std::string> data_members;  // links into data_file: markers, marker_names, orientations, analog, ...
   std::string tiers_file;
   std::string audio_file;   // empty: no audio group
   std::string scores_file;  // empty: no scores group
@@ -1075,7 +1182,7 @@ std::string UniqueToken() {
   return buf;
 }
 
-constexpr const char* kDataMembers[] = {"markers", "marker_names", "analog", "events", "provenance"};
+constexpr const char* kDataMembers[] = {"markers", "marker_names", "orientations", "analog", "events", "provenance"};
 
 }  // namespace
 
@@ -1533,6 +1640,9 @@ struct CorpusTransaction::TakeWriter::Impl {
   std::string data_file;  // its name, as the index links it
   Handle markers;
   Handle analog;
+  Handle orientations;  // only for a take with a skeleton
+  int64_t joints = 0;   // skeleton joints (= marker_count) when orientations are written
+  int64_t orientation_frames = 0;
   int64_t marker_count = 0;
   int64_t analog_channels = 0;
   int64_t analog_samples = 0;
@@ -1563,6 +1673,7 @@ struct CorpusTransaction::TakeWriter::Impl {
     if (finished || tx == nullptr) return;
     auto lock = h5::Lock();
     analog.Reset();
+    orientations.Reset();
     markers.Reset();
     file.Reset();
     H5Eclear2(H5E_DEFAULT);
@@ -1717,14 +1828,32 @@ void CorpusTransaction::TakeWriter::AppendAnalog(const float* values, int64_t sa
   w.analog_samples += samples;
 }
 
+void CorpusTransaction::TakeWriter::AppendOrientations(const float* wxyz, int64_t frames) {
+  auto lock = h5::Lock();
+  Impl& w = *impl_;
+  w.CheckOpen();
+  if (frames < 0) throw InvalidInput("AppendOrientations: negative frame count");
+  if (frames == 0) return;
+  if (!w.orientations.valid()) throw InvalidInput("take '" + w.name + "' was begun without a skeleton");
+  if (wxyz == nullptr && w.joints > 0) throw InvalidInput("AppendOrientations: no data");
+  AppendOrientationFrames(w.orientations.get(), w.orientation_frames, frames, w.joints, wxyz, w.tx->where,
+                          w.object + "/orientations");
+  w.orientation_frames += frames;
+}
+
 void CorpusTransaction::TakeWriter::Finish() {
   auto lock = h5::Lock();
   Impl& w = *impl_;
   w.CheckOpen();
+  if (w.orientations.valid() && w.orientation_frames != w.flushed + w.buffered) {
+    throw InvalidInput("take '" + w.name + "': orientations for " + std::to_string(w.orientation_frames) +
+                       " frames but markers for " + std::to_string(w.flushed + w.buffered) + " frames");
+  }
   w.FlushBatch();
   h5::WriteAttr(w.markers.get(), "gaps", w.gaps, w.tx->where, w.object + "/markers");
   w.Release();
   w.analog.Reset();
+  w.orientations.Reset();
   w.markers.Reset();
   h5::Check(H5Fflush(w.file.get(), H5F_SCOPE_GLOBAL), w.tx->where, "cannot flush", w.data_file);
   CorpusTransaction::Impl::Close(&w.file, w.tx->path, w.data_file);
@@ -1748,6 +1877,25 @@ CorpusTransaction::TakeWriter CorpusTransaction::BeginTake(const Take& h, IfTake
                        std::to_string(channels));
   }
   CheckAudio(h.audio);
+  const int64_t joints = static_cast<int64_t>(h.skeleton.size());
+  if (joints > 0 && joints != marker_count) {
+    throw InvalidInput("take '" + h.name + "': a skeleton of " + std::to_string(joints) + " joints for " +
+                       std::to_string(marker_count) + " markers (joint j must be marker j)");
+  }
+  if (joints == 0 && !h.orientations.empty()) {
+    throw InvalidInput("take '" + h.name + "' has orientations but no skeleton");
+  }
+  if (!h.orientations.empty() && h.orientations.joints() != joints) {
+    throw InvalidInput("take '" + h.name + "': orientations of " + std::to_string(h.orientations.joints()) +
+                       " joints for a skeleton of " + std::to_string(joints));
+  }
+  for (int64_t j = 0; j < joints; ++j) {
+    const int parent = h.skeleton[static_cast<size_t>(j)].parent;
+    if (parent < -1 || parent >= j) {
+      throw InvalidInput("take '" + h.name + "': skeleton joint '" + h.skeleton[static_cast<size_t>(j)].name +
+                         "' has parent " + std::to_string(parent) + " (parents must come first)");
+    }
+  }
   auto lock = h5::Lock();
   Impl& t = *impl_;
   t.CheckUsable();
@@ -1773,6 +1921,7 @@ CorpusTransaction::TakeWriter CorpusTransaction::BeginTake(const Take& h, IfTake
   e.analog_channels = channels;
   for (const LabelTier& tier : h.tiers) e.tier_names.push_back(tier.name);
   e.data_members = {"markers", "marker_names"};
+  if (joints > 0) e.data_members.push_back("orientations");
   if (channels > 0) e.data_members.push_back("analog");
   e.data_members.push_back("events");
   e.data_members.push_back("provenance");
@@ -1827,6 +1976,17 @@ CorpusTransaction::TakeWriter CorpusTransaction::BeginTake(const Take& h, IfTake
     h5::WriteAttr(wi.analog.get(), "rate_hz", h.analog.rate_hz, where, aobj + "/data");
     Append2D(wi.analog.get(), 0, h.analog.samples, channels, h.analog.data.data(), where, aobj + "/data");
     wi.analog_samples = h.analog.samples;
+  }
+  if (joints > 0) {
+    const std::string oobj = obj + "/orientations";
+    wi.joints = joints;
+    wi.orientations = CreateOrientations(g, joints, where, oobj);
+    h5::WriteAttr(wi.orientations.get(), "skeleton", SkeletonJson(h.skeleton), where, oobj);
+    h5::WriteAttr(wi.orientations.get(), "convention",
+                  std::string("w x y z: global orientation, rotates the joint's axes into the lab frame"), where, oobj);
+    AppendOrientationFrames(wi.orientations.get(), 0, h.orientations.frames(), joints, h.orientations.data().data(),
+                            where, oobj);
+    wi.orientation_frames = h.orientations.frames();
   }
   WriteEvents(g, h.events, where, obj);
   WriteProvenance(g, h.provenance, csw_version, imported_utc, where, obj);

@@ -145,6 +145,9 @@ class CorpusTransaction {
     void AppendFrames(const float* xyz_mm, int64_t frames);
     // samples × channels floats; the channels are those of the header's analog.
     void AppendAnalog(const float* values, int64_t samples);
+    // frames × joints × 4 floats (w, x, y, z global joint orientations), for a
+    // take begun with a skeleton; by Finish() as many frames as the markers.
+    void AppendOrientations(const float* wxyz, int64_t frames);
     // Writes the remaining buffered frames and the summary attributes.
     void Finish();
     int64_t frames_written() const;
@@ -158,10 +161,13 @@ class CorpusTransaction {
 
   // Starts a take from everything but its markers: name, rate, first_frame,
   // marker_names, source_units, analog (its data, possibly empty, is written
-  // at once; more may follow with AppendAnalog), events, tiers, audio,
-  // audio_path and provenance. header.markers is ignored. Throws InvalidInput
-  // when the name is not a valid take name, or a take of that name exists
-  // and if_exists is kFail.
+  // at once; more may follow with AppendAnalog), skeleton and orientations
+  // (likewise: header.orientations is written at once, more may follow with
+  // AppendOrientations; the skeleton must have one joint per marker), events,
+  // tiers, audio, audio_path and provenance. header.markers is ignored.
+  // Throws InvalidInput when the name is not a valid take name, a take of that
+  // name exists and if_exists is kFail, or the skeleton does not match the
+  // markers.
   TakeWriter BeginTake(const Take& header, IfTakeExists if_exists = IfTakeExists::kFail);
   // The whole take at once (BeginTake + AppendFrames + Finish).
   void WriteTake(const Take& take, IfTakeExists if_exists = IfTakeExists::kFail);

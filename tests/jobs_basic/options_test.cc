@@ -30,9 +30,37 @@ TEST(ImportOptionsCheck, RejectsEachBadRequestWithItsReason) {
   EXPECT_EQ(o.Check(), "import: chunk_frames must be positive");
   o.chunk_frames = 4096;
   o.files = {"a.c3d", "other.h5"};
-  EXPECT_EQ(o.Check(), "import: other.h5: unsupported file type (expected .c3d, .trc, .TextGrid, .eaf or .wav)");
+  EXPECT_EQ(o.Check(), "import: other.h5: unsupported file type (expected .c3d, .trc, .bvh, .TextGrid, .eaf or .wav)");
   o.files = {"notes.txt"};
-  EXPECT_EQ(o.Check(), "import: notes.txt: unsupported file type (expected .c3d, .trc, .TextGrid, .eaf or .wav)");
+  EXPECT_EQ(o.Check(), "import: notes.txt: unsupported file type (expected .c3d, .trc, .bvh, .TextGrid, .eaf or .wav)");
+}
+
+TEST(ImportOptionsCheck, UnitsAreOneOfFiveAndOnlyForBvhFiles) {
+  ImportOptions o;
+  o.files = {"a.bvh", "a.TextGrid", "b.c3d"};
+  o.corpus = "c.h5";
+  EXPECT_EQ(o.Check(), "");  // guessed
+  for (const char* u : {"mm", "cm", "dm", "m", "in"}) {
+    o.units = u;
+    EXPECT_EQ(o.Check(), "") << u;
+  }
+  o.units = "ft";
+  EXPECT_EQ(o.Check(), "import: --units must be mm, cm, dm, m or in, not 'ft'");
+  o.units = "cm";
+  o.files = {"b.c3d", "c.trc"};
+  EXPECT_EQ(o.Check(), "import: --units applies to .bvh files (C3D and TRC files carry their unit)");
+  Progress progress;
+  EXPECT_THROW(Import(o, progress), UsageError);
+}
+
+TEST(ExportOptionsCheck, UnitsOnlyForBvh) {
+  ExportOptions o{"c.h5", "take01", "bvh", "out.bvh", "m"};
+  EXPECT_EQ(o.Check(), "");
+  o.units = "yd";
+  EXPECT_EQ(o.Check(), "export: --units must be mm, cm, dm, m or in, not 'yd'");
+  o.units = "cm";
+  o.format = "trc";
+  EXPECT_EQ(o.Check(), "export: --units applies to --format bvh only");
 }
 
 TEST(ImportOptionsCheck, MissingMarkersetFileIsAUsageError) {
@@ -52,14 +80,14 @@ TEST(ImportOptionsCheck, MissingMarkersetFileIsAUsageError) {
 }
 
 TEST(ExportOptionsCheck, RequiresEveryFieldAndAKnownFormat) {
-  ExportOptions o{"c.h5", "take01", "c3d", "out.c3d"};
+  ExportOptions o{"c.h5", "take01", "c3d", "out.c3d", ""};
   EXPECT_EQ(o.Check(), "");
-  for (const char* f : {"trc", "csv"}) {
+  for (const char* f : {"trc", "csv", "bvh"}) {
     o.format = f;
     EXPECT_EQ(o.Check(), "") << f;
   }
   o.format = "xyz";
-  EXPECT_EQ(o.Check(), "export: --format must be c3d, trc or csv");
+  EXPECT_EQ(o.Check(), "export: --format must be c3d, trc, csv or bvh");
   o.format = "c3d";
   o.take = "";
   EXPECT_EQ(o.Check(), "export: corpus, --take and -o are required");

@@ -81,24 +81,27 @@ class InspectCommand : public Command {
 class ImportCommand : public Command {
  public:
   void Register(CLI::App& app) override {
-    sub_ = app.add_subcommand("import",
-                              "Import captures (.c3d, .trc) with their labels (.TextGrid, .eaf) and audio (.wav), "
-                              "paired by base name, into an HDF5 corpus in one crash-safe step");
+    sub_ =
+        app.add_subcommand("import",
+                           "Import captures (.c3d, .trc, .bvh) with their labels (.TextGrid, .eaf) and audio (.wav), "
+                           "paired by base name, into an HDF5 corpus in one crash-safe step");
     sub_->add_option("files", options_.files, "Files to import")->required();
     sub_->add_option("-o,--output", options_.corpus, "Corpus file (created when absent)")->required();
     sub_->add_option("--markerset", options_.markerset, "Marker-set JSON every take must match");
     sub_->add_flag("--replace", options_.replace, "Replace takes that already exist in the corpus");
+    sub_->add_option("--units", options_.units,
+                     "Length unit of .bvh files (mm, cm, dm, m, in); default guessed from the skeleton's size, "
+                     "with a warning");
     sub_->add_flag("--json", json_, "Print the import summary as JSON");
   }
   int Run(Progress& progress) override {
     if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
     jobs::ImportResult r = jobs::Import(options_, progress);
     if (json_) {
-      PrintJson({{"corpus", options_.corpus}, {"takes", r.takes}, {"frames", r.frames}, {"warnings", r.warnings}});
+      PrintJson(jobs::ImportReportJson(options_, r));
     } else {
-      for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
-      std::cout << "imported " << r.takes.size() << " take(s), " << r.frames << " frames into " << options_.corpus
-                << "\n";
+      std::cerr << jobs::ImportWarningsText(r);
+      std::cout << jobs::ImportSummaryText(options_, r);
     }
     return 0;
   }
@@ -132,12 +135,14 @@ class InfoCommand : public Command {
 class ExportCommand : public Command {
  public:
   void Register(CLI::App& app) override {
-    sub_ = app.add_subcommand("export", "Write one take of a corpus as C3D, TRC or CSV");
+    sub_ = app.add_subcommand("export", "Write one take of a corpus as C3D, TRC, CSV or (a skeleton capture) BVH");
     sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
     sub_->add_option("--take", options_.take, "Take name")->required();
-    sub_->add_option("--format", options_.format, "c3d, trc or csv")
+    sub_->add_option("--format", options_.format, "c3d, trc, csv or bvh")
         ->required()
-        ->check(CLI::IsMember({"c3d", "trc", "csv"}));
+        ->check(CLI::IsMember({"c3d", "trc", "csv", "bvh"}));
+    sub_->add_option("--units", options_.units,
+                     "BVH only: length unit written (mm, cm, dm, m, in); default the take's imported unit");
     sub_->add_option("-o,--output", options_.output, "Output file")->required();
   }
   int Run(Progress& progress) override {

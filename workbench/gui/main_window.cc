@@ -503,9 +503,9 @@ void MainWindow::ShowImportDialog() {
   connect(buttons, &QDialogButtonBox::accepted, &dialog, &QDialog::accept);
   connect(buttons, &QDialogButtonBox::rejected, &dialog, &QDialog::reject);
   connect(add, &QPushButton::clicked, &dialog, [&] {
-    QStringList chosen =
-        QFileDialog::getOpenFileNames(&dialog, tr("Add Files"), settings_->value("lastDir").toString(),
-                                      tr("Captures and labels (*.c3d *.trc *.TextGrid *.eaf *.wav);;All files (*)"));
+    QStringList chosen = QFileDialog::getOpenFileNames(
+        &dialog, tr("Add Files"), settings_->value("lastDir").toString(),
+        tr("Captures and labels (*.c3d *.trc *.bvh *.TextGrid *.eaf *.wav);;All files (*)"));
     if (!chosen.isEmpty()) settings_->setValue("lastDir", QFileInfo(chosen.front()).absolutePath());
     files->addItems(chosen);
   });

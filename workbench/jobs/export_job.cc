@@ -9,6 +9,7 @@
 #include "core/take.h"
 #include "io/c3d/c3d.h"
 #include "io/corpus/corpus.h"
+#include "io/formats/bvh.h"
 #include "io/formats/trc.h"
 #include "workbench/jobs/job_util.h"
 
@@ -20,7 +21,11 @@ namespace fs = std::filesystem;
 
 std::string ExportOptions::Check() const {
   if (corpus.empty() || take.empty() || output.empty()) return "export: corpus, --take and -o are required";
-  if (format != "c3d" && format != "trc" && format != "csv") return "export: --format must be c3d, trc or csv";
+  if (format != "c3d" && format != "trc" && format != "csv" && format != "bvh") {
+    return "export: --format must be c3d, trc, csv or bvh";
+  }
+  if (!units.empty() && format != "bvh") return "export: --units applies to --format bvh only";
+  if (!units.empty() && !IsBvhUnit(units)) return "export: --units must be mm, cm, dm, m or in, not '" + units + "'";
   return "";
 }
 
@@ -30,6 +35,10 @@ void Export(const ExportOptions& options, Progress& progress) {
   if (!corpus.HasTake(options.take)) throw InvalidInput(options.corpus + ": no take named \"" + options.take + "\"");
   progress.Update("export", 0.0);
   Take take = corpus.LoadTake(options.take);
+  if (options.format == "bvh" && take.skeleton.empty()) {
+    throw InvalidInput(options.corpus + ": take \"" + options.take +
+                       "\" has no skeleton; BVH export needs a skeleton capture (a BVH import or a virtual signer)");
+  }
   // Write into a temporary sibling folder under the final file name (formats such as
   // TRC record their own file name), then rename: a failed export never leaves half a file.
   fs::path out_path(options.output);
@@ -43,6 +52,10 @@ void Export(const ExportOptions& options, Progress& progress) {
       WriteC3d(tmp, take);
     } else if (options.format == "trc") {
       WriteTrc(tmp, take);
+    } else if (options.format == "bvh") {
+      BvhWriteOptions bvh;
+      bvh.units = options.units;
+      WriteBvh(tmp, take, bvh);
     } else {
       std::ofstream out(tmp);
       if (!out) throw IoError(tmp, "cannot open for writing");

@@ -13,6 +13,7 @@
 #include "core/take.h"
 #include "io/c3d/c3d.h"
 #include "io/corpus/corpus.h"
+#include "io/formats/bvh.h"
 #include "io/formats/eaf.h"
 #include "io/formats/textgrid.h"
 #include "io/formats/trc.h"
@@ -29,7 +30,13 @@ std::string ImportOptions::Check() const {
   if (chunk_frames < 1) return "import: chunk_frames must be positive";
   for (const auto& f : files) {
     if (FormatOf(f).empty() || FormatOf(f) == "hdf5")
-      return "import: " + f + ": unsupported file type (expected .c3d, .trc, .TextGrid, .eaf or .wav)";
+      return "import: " + f + ": unsupported file type (expected .c3d, .trc, .bvh, .TextGrid, .eaf or .wav)";
+  }
+  if (!units.empty()) {
+    if (!IsBvhUnit(units)) return "import: --units must be mm, cm, dm, m or in, not '" + units + "'";
+    bool any_bvh = false;
+    for (const auto& f : files) any_bvh = any_bvh || FormatOf(f) == "bvh";
+    if (!any_bvh) return "import: --units applies to .bvh files (C3D and TRC files carry their unit)";
   }
   std::error_code ec;
   if (!markerset.empty() && !std::filesystem::is_regular_file(markerset, ec))
@@ -60,7 +67,7 @@ ImportResult Import(const ImportOptions& options, Progress& progress) {
         throw UsageError(f + ": a second " + what + " for take \"" + stem + "\" (first: " + slot + ")");
       slot = f;
     };
-    if (fmt == "c3d" || fmt == "trc") {
+    if (fmt == "c3d" || fmt == "trc" || fmt == "bvh") {
       set(t.capture, "capture");
       t.capture_format = fmt;
     } else if (fmt == "textgrid" || fmt == "eaf") {
@@ -75,7 +82,7 @@ ImportResult Import(const ImportOptions& options, Progress& progress) {
     const TakeFiles& t = takes[stem];
     if (t.capture.empty()) {
       std::string f = !t.labels.empty() ? t.labels : t.audio;
-      throw UsageError(f + ": no capture (.c3d or .trc) named \"" + stem + "\" to pair it with");
+      throw UsageError(f + ": no capture (.c3d, .trc or .bvh) named \"" + stem + "\" to pair it with");
     }
   }
   std::optional<MarkerSet> markerset;
@@ -97,7 +104,7 @@ ImportResult Import(const ImportOptions& options, Progress& progress) {
     header.provenance.imported_utc = UtcNow();
     header.provenance.sources.push_back({files.capture, Sha256OfFile(files.capture), files.capture_format});
     std::unique_ptr<C3dReader> c3d;
-    Take whole;  // TRC: small files, read whole
+    Take whole;  // TRC, BVH: text files, read whole
     if (files.capture_format == "c3d") {
       c3d = std::make_unique<C3dReader>(files.capture);
       const C3dInfo& info = c3d->info();
@@ -111,7 +118,13 @@ ImportResult Import(const ImportOptions& options, Progress& progress) {
       header.analog.units = info.analog_units;
       for (const auto& w : info.warnings) header.provenance.warnings.push_back(w);
     } else {
-      whole = ReadTrc(files.capture);
+      if (files.capture_format == "bvh") {
+        BvhReadOptions bvh;
+        bvh.units = options.units;
+        whole = ReadBvh(files.capture, bvh);
+      } else {
+        whole = ReadTrc(files.capture);
+      }
       header.rate_hz = whole.rate_hz;
       header.first_frame = whole.first_frame;
       header.marker_names = whole.marker_names;
@@ -183,6 +196,22 @@ ImportResult Import(const ImportOptions& options, Progress& progress) {
   progress.Update("commit", 1.0);
   tx.Commit();
   return result;
+}
+
+nlohmann::json ImportReportJson(const ImportOptions& options, const ImportResult& result) {
+  return {
+      {"corpus", options.corpus}, {"takes", result.takes}, {"frames", result.frames}, {"warnings", result.warnings}};
+}
+
+std::string ImportWarningsText(const ImportResult& result) {
+  std::string out;
+  for (const auto& w : result.warnings) out += "warning: " + w + "\n";
+  return out;
+}
+
+std::string ImportSummaryText(const ImportOptions& options, const ImportResult& result) {
+  return "imported " + std::to_string(result.takes.size()) + " take(s), " + std::to_string(result.frames) +
+         " frames into " + options.corpus + "\n";
 }
 
 }  // namespace csw::jobs

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "io/c3d/c3d.h"
 #include "io/corpus/hdf5_util.h"
+#include "io/formats/bvh.h"
 #include "io/formats/eaf.h"
 #include "io/formats/textgrid.h"
 #include "io/formats/trc.h"
@@ -131,6 +132,17 @@ json Inspect(const std::string& path, Progress& progress) {
               {"warnings", i.warnings}});
   } else if (format == "trc") {
     j.update(TakeFacts(ReadTrc(path)));
+  } else if (format == "bvh") {
+    Take t = ReadBvh(path);
+    int64_t end_sites = 0, channels = 0;
+    for (const SkeletonJoint& s : t.skeleton) {
+      end_sites += s.end_site ? 1 : 0;
+      channels += static_cast<int64_t>(s.channels.size());
+    }
+    j.update(TakeFacts(t));
+    j.update({{"joints", static_cast<int64_t>(t.skeleton.size()) - end_sites},
+              {"end_sites", end_sites},
+              {"channels", channels}});
   } else if (format == "textgrid") {
     double xmin = 0, xmax = 0;
     auto tiers = ReadTextGrid(path, &xmin, &xmax);
@@ -157,7 +169,7 @@ json Inspect(const std::string& path, Progress& progress) {
                          "; expected 'csw-corpus' or 'csw-models')");
     }
   } else {
-    throw InvalidInput(path + ": unknown file type (expected .c3d, .trc, .TextGrid, .eaf, .wav or .h5)");
+    throw InvalidInput(path + ": unknown file type (expected .c3d, .trc, .bvh, .TextGrid, .eaf, .wav or .h5)");
   }
   return j;
 }

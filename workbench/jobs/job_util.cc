@@ -10,6 +10,7 @@ std::string FormatOf(const std::string& path) {
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (ext == ".c3d") return "c3d";
   if (ext == ".trc") return "trc";
+  if (ext == ".bvh") return "bvh";
   if (ext == ".textgrid") return "textgrid";
   if (ext == ".eaf") return "eaf";
   if (ext == ".wav") return "wav";

@@ -14,7 +14,7 @@ class UsageError : public InvalidInput {
   using InvalidInput::InvalidInput;
 };
 
-// Format of a file from its extension: "c3d", "trc", "textgrid", "eaf", "wav",
+// Format of a file from its extension: "c3d", "trc", "bvh", "textgrid", "eaf", "wav",
 // "hdf5" (.h5/.hdf5: a corpus or a model file, told apart by its root "format"
 // attribute), or "" when unknown.
 std::string FormatOf(const std::string& path);

@@ -126,6 +126,50 @@ inline void ExpectSameTake(const Take& a, const Take& b) {
   EXPECT_EQ(a.provenance.csw_version, b.provenance.csw_version);
   EXPECT_EQ(a.provenance.imported_utc, b.provenance.imported_utc);
   EXPECT_EQ(a.provenance.warnings, b.provenance.warnings);
+  ASSERT_EQ(a.skeleton.size(), b.skeleton.size());
+  for (size_t j = 0; j < a.skeleton.size(); ++j) {
+    EXPECT_EQ(a.skeleton[j].name, b.skeleton[j].name);
+    EXPECT_EQ(a.skeleton[j].parent, b.skeleton[j].parent);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(a.skeleton[j].offset_mm[k], b.skeleton[j].offset_mm[k]);
+    EXPECT_EQ(a.skeleton[j].channels, b.skeleton[j].channels);
+    EXPECT_EQ(a.skeleton[j].end_site, b.skeleton[j].end_site);
+  }
+  EXPECT_EQ(a.orientations.frames(), b.orientations.frames());
+  EXPECT_EQ(a.orientations.joints(), b.orientations.joints());
+  EXPECT_TRUE(SameFloats(a.orientations.data(), b.orientations.data())) << "orientations differ";
+}
+
+// MakeFullTake with a skeleton: marker 0 is the root, 1 and 2 its chain, 3
+// an end site of 2; orientations are unit quaternions turning about z, with
+// joint 1 missing (NaN) on frames 10-14.
+inline Take MakeSkeletonTake(const std::string& name, int64_t frames = 120) {
+  Take t = MakeFullTake(name, frames, 4);
+  t.skeleton.resize(4);
+  const char* names[4] = {"Hips", "Spine", "Neck é", "Neck é_End"};
+  for (int j = 0; j < 4; ++j) {
+    t.marker_names[static_cast<size_t>(j)] = names[j];
+    t.skeleton[static_cast<size_t>(j)].name = names[j];
+    t.skeleton[static_cast<size_t>(j)].parent = j - 1;
+    t.skeleton[static_cast<size_t>(j)].offset_mm[1] = 100.0 * j + 0.125;
+    t.skeleton[static_cast<size_t>(j)].offset_mm[2] = -1.0 / 3.0;
+  }
+  t.skeleton[0].channels = {"Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation"};
+  t.skeleton[1].channels = {"Yrotation", "Xrotation", "Zrotation"};
+  t.skeleton[2].channels = {"Xrotation", "Zrotation", "Yrotation"};
+  t.skeleton[3].end_site = true;
+  t.orientations.Resize(frames, 4);
+  for (int64_t f = 0; f < frames; ++f) {
+    for (int64_t j = 0; j < 4; ++j) {
+      if (j == 1 && f >= 10 && f < 15) continue;  // stays NaN
+      const double half = 0.5 * (0.01 * static_cast<double>(f) + 0.2 * static_cast<double>(j));
+      float* q = t.orientations.at(f, j);
+      q[0] = static_cast<float>(std::cos(half));
+      q[1] = 0.0f;
+      q[2] = 0.0f;
+      q[3] = static_cast<float>(std::sin(half));
+    }
+  }
+  return t;
 }
 
 }  // namespace csw::testing
