@@ -12,6 +12,7 @@
 #include "workbench/jobs/keys_suggest_job.h"
 #include "workbench/jobs/model_jobs.h"
 #include "workbench/jobs/phasing_job.h"
+#include "workbench/jobs/sign_sequence_job.h"
 #include "workbench/jobs/transitions_job.h"
 
 namespace csw::cli {
@@ -618,6 +619,44 @@ class TransitionsCommand : public Command {
   bool json_ = false;
 };
 
+class SignSequenceCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("sign-sequence",
+                              "Synthesise a sign utterance from captured signs: motion retrieval of one occurrence per "
+                              "gloss, transitions by interpolation or blending with a duration model; writes BVH and "
+                              "TextGrid (docs/transitions.md)");
+    sub_->add_option("corpus", options_.corpus, "Corpus file with skeleton takes")->required();
+    sub_->add_option("--glosses", options_.glosses, "The signs of the utterance, in order (comma-separated)")
+        ->delimiter(',')
+        ->required();
+    sub_->add_option("--takes", options_.takes,
+                     "Takes to cut signs from, comma-separated names or glob patterns; default every take");
+    sub_->add_option("--tier", options_.tier, "Interval tier whose labels are glosses")->capture_default_str();
+    sub_->add_option("--durations", options_.durations,
+                     "Duration models file of csw transitions -o (default: the seed's SURFACE plane)");
+    sub_->add_option("--model", options_.model, "Model of that file (default: its best)");
+    sub_->add_option("--method", options_.method, "Transitions: blend or interpolate")->capture_default_str();
+    sub_->add_flag("--smooth", options_.smooth, "Blend with smooth (3u^2 - 2u^3) instead of linear weights");
+    sub_->add_option("-o,--output", options_.output, "Output BVH file (a .TextGrid is written beside it)")->required();
+    sub_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::SignSequence(options_, progress);
+    if (json_) {
+      PrintJson(r);
+    } else {
+      std::cout << jobs::SignSequenceText(r);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::SignSequenceOptions options_;
+  bool json_ = false;
+};
+
 class PackCommand : public Command {
  public:
   void Register(CLI::App& app) override {
@@ -681,6 +720,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<KeysCommand>());
   c.push_back(std::make_unique<PhasingCommand>());
   c.push_back(std::make_unique<TransitionsCommand>());
+  c.push_back(std::make_unique<SignSequenceCommand>());
   c.push_back(std::make_unique<PackCommand>());
   c.push_back(std::make_unique<UpgradeCommand>());
   return c;
