@@ -60,12 +60,13 @@ double Flank(double u, double ramp) { return ramp > 0.0 ? RaisedCosine(u / ramp)
 // Least-squares (inset, ramp) of one flank on samples (d, k), d = signed time
 // from the consonant boundary towards its inside (t − start on the left,
 // end − t on the right): model Flank(d − inset + ramp, ramp).
-std::pair<double, double> FitFlank(const std::vector<double>& d, const std::vector<double>& k, double* sse) {
+std::pair<double, double> FitFlank(const std::vector<double>& d, const std::vector<double>& k,
+                                   const std::vector<double>& wt, double* sse) {
   auto loss = [&](double inset, double ramp) {
     double s = 0.0;
     for (size_t i = 0; i < d.size(); ++i) {
       const double e = k[i] - Flank(d[i] - inset + ramp, ramp);
-      s += e * e;
+      s += wt[i] * e * e;
     }
     return s;
   };
@@ -118,39 +119,45 @@ double KStyle::Evaluate(double t_s, double start_s, double end_s) const {
 }
 
 KStyle FitKStyle(const std::vector<double>& t_s, const std::vector<double>& start_s, const std::vector<double>& end_s,
-                 const std::vector<double>& k) {
+                 const std::vector<double>& k, const std::vector<double>& weights) {
   const size_t n = t_s.size();
-  if (start_s.size() != n || end_s.size() != n || k.size() != n) throw InvalidInput("FitKStyle: sizes differ");
-  std::vector<double> dl, kl, dr, kr;
+  if (start_s.size() != n || end_s.size() != n || k.size() != n || (!weights.empty() && weights.size() != n)) {
+    throw InvalidInput("FitKStyle: sizes differ");
+  }
+  auto weight = [&](size_t i) { return weights.empty() ? 1.0 : weights[i]; };
+  std::vector<double> dl, kl, wl, dr, kr, wr;
   for (size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(k[i]) || !std::isfinite(t_s[i])) continue;
+    if (!std::isfinite(k[i]) || !std::isfinite(t_s[i]) || !(weight(i) > 0)) continue;
     const double centre = 0.5 * (start_s[i] + end_s[i]);
     if (t_s[i] < centre) {
       dl.push_back(t_s[i] - start_s[i]);
       kl.push_back(k[i]);
+      wl.push_back(weight(i));
     } else {
       dr.push_back(end_s[i] - t_s[i]);
       kr.push_back(k[i]);
+      wr.push_back(weight(i));
     }
   }
   if (dl.empty() && dr.empty()) throw InvalidInput("FitKStyle: no finite sample");
   KStyle s;
   double sse_l = 0, sse_r = 0;
-  if (!dl.empty()) std::tie(s.left_inset_s, s.left_ramp_s) = FitFlank(dl, kl, &sse_l);
-  if (!dr.empty()) std::tie(s.right_inset_s, s.right_ramp_s) = FitFlank(dr, kr, &sse_r);
+  if (!dl.empty()) std::tie(s.left_inset_s, s.left_ramp_s) = FitFlank(dl, kl, wl, &sse_l);
+  if (!dr.empty()) std::tie(s.right_inset_s, s.right_ramp_s) = FitFlank(dr, kr, wr, &sse_r);
   if (dl.empty()) s.left_inset_s = s.right_inset_s, s.left_ramp_s = s.right_ramp_s;
   if (dr.empty()) s.right_inset_s = s.left_inset_s, s.right_ramp_s = s.left_ramp_s;
-  // The residual of the whole model (min of both flanks) on every sample.
-  double sse = 0;
+  // The (weighted) RMS residual of the whole model (min of both flanks).
+  double sse = 0, wsum = 0;
   int count = 0;
   for (size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(k[i]) || !std::isfinite(t_s[i])) continue;
+    if (!std::isfinite(k[i]) || !std::isfinite(t_s[i]) || !(weight(i) > 0)) continue;
     const double e = k[i] - s.Evaluate(t_s[i], start_s[i], end_s[i]);
-    sse += e * e;
+    sse += weight(i) * e * e;
+    wsum += weight(i);
     ++count;
   }
   s.samples = count;
-  s.rms = std::sqrt(sse / count);
+  s.rms = std::sqrt(sse / wsum);
   return s;
 }
 
@@ -425,19 +432,20 @@ OhmanFit FitOhman(const std::vector<ParameterSeries>& series, const OhmanOptions
       double num = 0, den = 0;
       if (RowFinite(s.values, f)) {
         for (Eigen::Index x = 0; x < P; ++x) {
-          if (!(std::abs(e[x]) >= options.min_effect * scale[x]) || !(std::abs(e[x]) > 0)) continue;
+          if (!(std::abs(e[x]) > 0)) continue;
           const double d = s.values(f, x) - vref[x];
-          t.k_per_parameter(f - first, x) = d / e[x];
+          if (std::abs(e[x]) >= options.min_effect * scale[x]) t.k_per_parameter(f - first, x) = d / e[x];
           const double en = e[x] / scale[x];
           num += en * d / scale[x];
           den += en * en;
         }
       }
       t.k.push_back(den > 0 ? num / den : kNaN);
+      t.k_weight.push_back(den);
     }
   }
   for (OhmanConsonant& oc : fit.consonants) {
-    std::vector<double> ts, starts, ends, ks;
+    std::vector<double> ts, starts, ends, ks, ws;
     double lo_tau = std::numeric_limits<double>::infinity(), hi_tau = -lo_tau;
     for (const VcvToken& t : fit.tokens) {
       if (t.consonant != oc.consonant) continue;
@@ -448,20 +456,20 @@ OhmanFit FitOhman(const std::vector<ParameterSeries>& series, const OhmanOptions
         starts.push_back(t.c_start_s);
         ends.push_back(t.c_end_s);
         ks.push_back(t.k[i]);
+        ws.push_back(t.k_weight[i]);
         lo_tau = std::min(lo_tau, t.k_times_s[i] - c);
         hi_tau = std::max(hi_tau, t.k_times_s[i] - c);
       }
     }
     if (ks.empty()) {
-      fit.warnings.push_back("consonant '" + oc.consonant + "': no parameter effect reaches min_effect of its range: " +
-                             "k(t) not derived, stylised k left at its default");
+      fit.warnings.push_back("consonant '" + oc.consonant +
+                             "': no parameter effect: " + "k(t) not derived, stylised k left at its default");
       continue;
     }
-    oc.k_style = FitKStyle(ts, starts, ends, ks);
+    oc.k_style = FitKStyle(ts, starts, ends, ks, ws);
     const double step = options.k_grid_step_s;
     for (double tau = std::ceil(lo_tau / step) * step; tau <= hi_tau + 1e-12; tau += step) {
-      double sum = 0;
-      int n = 0;
+      double sum = 0, wsum = 0;
       for (const VcvToken& t : fit.tokens) {
         if (t.consonant != oc.consonant || t.k.size() < 2) continue;
         const double time = 0.5 * (t.c_start_s + t.c_end_s) + tau;
@@ -472,11 +480,12 @@ OhmanFit FitOhman(const std::vector<ParameterSeries>& series, const OhmanOptions
         const double span = t.k_times_s[i1] - t.k_times_s[i0];
         const double a = span > 0 ? (time - t.k_times_s[i0]) / span : 0.0;
         const double k = (1 - a) * t.k[i0] + a * t.k[i1];
-        if (std::isfinite(k)) sum += k, ++n;
+        const double w = (1 - a) * t.k_weight[i0] + a * t.k_weight[i1];
+        if (std::isfinite(k) && w > 0) sum += w * k, wsum += w;
       }
-      if (n == 0) continue;
+      if (!(wsum > 0)) continue;
       oc.mean_k_times_s.push_back(tau);
-      oc.mean_k.push_back(sum / n);
+      oc.mean_k.push_back(sum / wsum);
     }
   }
   return fit;

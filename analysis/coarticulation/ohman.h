@@ -25,13 +25,15 @@
 //      what is judged then. The RMS residual of the line is reported.
 //   5. k(t) of every token between its two vowel centres: per parameter
 //      (p − v_V) / (w (c − v_V)) where the fitted effect is at least
-//      min_effect of the parameter's range, and pooled over those parameters
-//      by least squares with range-normalised effects;
+//      min_effect of the parameter's range, and pooled over every parameter
+//      by least squares with range-normalised effects (VcvToken::k);
 //   6. the stylised k_c(t) of each consonant (KStyle): a plateau of 1 on
 //      [start + left_inset, end − right_inset] of the consonant interval with
 //      raised-cosine flanks of widths left_ramp / right_ramp, fitted to the
-//      pooled k of every token by least squares (each flank on the samples
-//      on its side of the consonant centre; grid search then a finer grid).
+//      pooled k of every token by weighted least squares (each flank on the
+//      samples on its side of the consonant centre; grid search then a finer
+//      grid) — the same as fitting K(t)·w(c − v_V) to the range-normalised
+//      trajectories of every parameter at once.
 //
 // Generation (GenerateOhman): the vocalic carrier interpolates (minimum-jerk
 // profile) between anchors at the vowel centres (vowel references) and the
@@ -84,10 +86,11 @@ struct KStyle {
   double Evaluate(double t_s, double start_s, double end_s) const;
 };
 
-// Fits a KStyle to samples (t, k) of consonant intervals [start, end]: all
-// vectors the same length. InvalidInput when sizes differ or no sample.
+// Fits a KStyle to samples (t, k) of consonant intervals [start, end] by
+// weighted least squares (weights empty = all 1): all vectors the same
+// length. InvalidInput when sizes differ or no sample.
 KStyle FitKStyle(const std::vector<double>& t_s, const std::vector<double>& start_s, const std::vector<double>& end_s,
-                 const std::vector<double>& k);
+                 const std::vector<double>& k, const std::vector<double>& weights = {});
 
 // One V C V token.
 struct VcvToken {
@@ -97,10 +100,15 @@ struct VcvToken {
   double realisation_s = 0;     // time of the maximum realisation
   Eigen::VectorXd realisation;  // p at the maximum realisation (P)
   // k(t) between the vowel centres, one sample per frame: times (take clock),
-  // pooled k (NaN when no parameter qualifies), per parameter (samples × P,
-  // NaN where the effect is below min_effect).
+  // pooled k over every parameter with a non-zero effect (least squares on
+  // the range-normalised deviations: k = Σ ê d̂ / Σ ê², NaN when no effect)
+  // and its weight Σ ê² (the stylisation and the mean curve weigh samples by
+  // it, so parameters with small effects, whose ratio is mostly noise, count
+  // little), per parameter (samples × P, NaN where the effect is below
+  // min_effect of the range).
   std::vector<double> k_times_s;
   std::vector<double> k;
+  std::vector<double> k_weight;
   Eigen::MatrixXd k_per_parameter;
 };
 
@@ -118,7 +126,8 @@ struct OhmanConsonant {
   Eigen::MatrixXd measured_effect;
   Eigen::MatrixXd realisation;  // contexts × P: mean realisation per context
   KStyle k_style;
-  // Mean pooled k over the tokens on a grid of time relative to the consonant centre.
+  // Mean pooled k over the tokens (weighted by their k_weight) on a grid of
+  // time relative to the consonant centre.
   std::vector<double> mean_k_times_s;
   std::vector<double> mean_k;
   bool Identifiable(int parameter) const;  // c(parameter) finite
