@@ -100,6 +100,7 @@ std::string OhmanOptions::Check() const {
     if (IsPauseLabel(v)) return "a vowel context cannot be a pause label";
   if (!(min_w > 0 && min_w < 1)) return "min_w must be in (0, 1)";
   if (!(min_effect >= 0 && min_effect < 1)) return "min_effect must be in [0, 1)";
+  if (!(min_vowel_spread >= 0 && min_vowel_spread < 1)) return "min_vowel_spread must be in [0, 1)";
   if (!(realisation_window_s >= 0 && realisation_window_s <= 0.2)) return "realisation window must be in [0, 0.2] s";
   if (!(min_pause_s >= 0)) return "min_pause_s must be >= 0";
   if (!(k_grid_step_s > 0 && k_grid_step_s <= 0.1)) return "k grid step must be in (0, 0.1] s";
@@ -396,7 +397,7 @@ OhmanFit FitOhman(const std::vector<ParameterSeries>& series, const OhmanOptions
         vmin = std::min(vmin, v_ref[static_cast<size_t>(j)][x]);
         vmax = std::max(vmax, v_ref[static_cast<size_t>(j)][x]);
       }
-      if (!(vmax - vmin > 1e-3 * scale[x])) continue;  // the contexts do not spread on x: slope undefined
+      if (!(vmax - vmin >= options.min_vowel_spread * scale[x]) || !(vmax - vmin > 0)) continue;  // no slope
       const double b = svr / svv;
       const double a = rm - b * vm;
       oc.w[x] = 1.0 - b;

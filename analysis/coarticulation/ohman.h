@@ -22,7 +22,9 @@
 //      the contexts (least squares on the mean realisation per vowel): slope
 //      1 − w, intercept a = w c; c = a / w where |w| ≥ min_w, else not
 //      identifiable (NaN): the consonant effect w (c − v_V) = a − w v_V is
-//      what is judged then. The RMS residual of the line is reported.
+//      what is judged then. Where the vowels' values spread over less than
+//      min_vowel_spread of the parameter's range the slope is not fitted
+//      (w, c NaN; effect = measured). The RMS residual of the line is reported.
 //   5. k(t) of every token between its two vowel centres: per parameter
 //      (p − v_V) / (w (c − v_V)) where the fitted effect is at least
 //      min_effect of the parameter's range, and pooled over every parameter
@@ -64,6 +66,10 @@ struct ParameterSeries {
 struct OhmanOptions {
   std::vector<std::string> vowels = {"a", "i", "u"};  // the symmetric contexts V
   double min_w = 0.1;                                 // |w| below: c(x) not identifiable
+  // The contexts' vowel values must spread over at least this fraction of
+  // the parameter's range for a slope (w) to be fitted; else w and c are
+  // undefined (NaN) and the effect is the measured one.
+  double min_vowel_spread = 0.05;
   double min_effect = 0.1;             // k from parameters whose fitted |w (c − v_V)| ≥ this × range
   double realisation_window_s = 0.02;  // averaging half-window around the maximum realisation
   double min_pause_s = 0.0;            // shorter gaps between phones are not pauses

@@ -395,4 +395,61 @@ void SaveConfusionMatrix(const std::string& path, const std::string& title, cons
   plot.Save(path);
 }
 
+void SaveCurves(const std::string& path, const std::string& title, const std::string& x_label,
+                const std::string& y_label, const std::vector<CurveSeries>& series, double y_min, double y_max) {
+  FigureFormat(Q(path));
+  if (series.empty()) throw InvalidInput(path + ": no curve to draw");
+  if (!(y_max > y_min)) throw InvalidInput(path + ": the y range is empty");
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const CurveSeries& c : series) {
+    if (c.x.size() != c.y.size()) throw InvalidInput(path + ": curve '" + c.name + "': x and y differ in length");
+    for (size_t i = 0; i < c.x.size(); ++i)
+      if (std::isfinite(c.x[i]) && std::isfinite(c.y[i])) lo = std::min(lo, c.x[i]), hi = std::max(hi, c.x[i]);
+  }
+  if (!std::isfinite(lo)) throw InvalidInput(path + ": no finite point to draw");
+  if (hi == lo) lo -= 1, hi += 1;
+  EnsureGuiApplication();
+  static const Rgb kColours[] = {{215, 40, 40}, {30, 80, 220}, {30, 150, 60}, {235, 130, 30}, {140, 60, 170}};
+  Canvas plot(900, 560);
+  plot.setAutoAddPlottableToLegend(false);
+  QCPAxisRect* rect = plot.axisRect();
+  StyleAxes(rect);
+  QCPAxis* xa = rect->axis(QCPAxis::atBottom);
+  QCPAxis* ya = rect->axis(QCPAxis::atLeft);
+  xa->setLabel(Q(x_label));
+  ya->setLabel(Q(y_label));
+  xa->setRange(lo, hi);
+  ya->setRange(y_min, y_max);
+  AddLine(plot, rect, lo, 0, hi, 0, QPen(QColor(0, 0, 0), 1));
+  AddLine(plot, rect, lo, 1, hi, 1, QPen(QColor(160, 160, 160), 1, Qt::DotLine));
+  AddLine(plot, rect, 0, y_min, 0, y_max, QPen(QColor(160, 160, 160), 1, Qt::DotLine));
+  QCPLegend* legend = plot.legend;
+  size_t colour = 0;
+  for (const CurveSeries& c : series) {
+    const QPen pen = c.dashed ? QPen(QColor(20, 20, 20), 2.5, Qt::DashLine)
+                              : QPen(Colour(kColours[colour++ % std::size(kColours)]), 1.6);
+    QCPGraph* first = nullptr;
+    QCPGraph* g = nullptr;
+    for (size_t i = 0; i <= c.x.size(); ++i) {
+      const bool ok = i < c.x.size() && std::isfinite(c.x[i]) && std::isfinite(c.y[i]);
+      if (!ok) {
+        g = nullptr;
+        continue;
+      }
+      if (g == nullptr) {
+        g = new QCPGraph(xa, ya);
+        g->setPen(pen);
+        if (first == nullptr) first = g;
+      }
+      g->addData(c.x[i], c.y[i]);
+    }
+    if (first != nullptr) {
+      first->setName(Q(c.name));
+      legend->addItem(new QCPPlottableLegendItem(legend, first));
+    }
+  }
+  AddHeader(plot, title, legend);
+  plot.Save(path);
+}
+
 }  // namespace csw::report

@@ -59,4 +59,18 @@ void SaveConfusionMatrix(const std::string& path, const std::string& title, cons
                          const std::vector<std::vector<int>>& counts, const std::string& true_axis = "true class",
                          const std::string& recognised_axis = "recognised class");
 
+// Curves on one plot (e.g. the Öhman emergence k(t) of one consonant in its
+// vowel contexts): each series a colour and one legend entry; NaN in x or y
+// breaks a series' line (several tokens in one series). Dashed series are
+// drawn in black (a model curve over the data). y from y_min to y_max; x
+// from the data. InvalidInput: no series, x and y of different lengths, no
+// finite point, y_max <= y_min.
+struct CurveSeries {
+  std::string name;
+  std::vector<double> x, y;
+  bool dashed = false;
+};
+void SaveCurves(const std::string& path, const std::string& title, const std::string& x_label,
+                const std::string& y_label, const std::vector<CurveSeries>& series, double y_min, double y_max);
+
 }  // namespace csw::report

@@ -14,7 +14,7 @@
 
 namespace csw::report {
 
-inline constexpr int kFiguresApiVersion = 3;
+inline constexpr int kFiguresApiVersion = 4;
 
 struct FiguresApi {
   int version = kFiguresApiVersion;
@@ -45,6 +45,10 @@ struct FiguresApi {
                                        const std::vector<std::string>& labels,
                                        const std::vector<std::vector<int>>& counts, const std::string& true_axis,
                                        const std::string& recognised_axis) = nullptr;
+  // Version 4: curves (the Öhman emergence figures).
+  std::string (*save_curves)(const std::string& path, const std::string& title, const std::string& x_label,
+                             const std::string& y_label, const std::vector<CurveSeries>& series, double y_min,
+                             double y_max) = nullptr;
 };
 
 }  // namespace csw::report
