@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -219,6 +220,33 @@ TEST(OhmanJob, FitsVirtualCuerTakesAndWritesTheFitFile) {
                     c["realisation"][vowel][x].get<double>() - target[x].get<double>(), 1e-9);
       }
     }
+  // Every token's pooled k: one value per frame between its vowel centres;
+  // over the tokens, the median k is about 1 at the consonant centre and
+  // about 0 at the vowel centres (the simulator's consonant window is a
+  // plateau over the consonant with 70 ms ramps starting 60 ms before it:
+  // ≤ 0.02 at a vowel centre 50-70 ms away).
+  ASSERT_EQ(fit["tokens"].size(), 9u);
+  std::vector<double> at_centre, at_vowels;
+  for (const json& t : fit["tokens"]) {
+    ASSERT_EQ(t["k"].size(), t["k_times_s"].size());
+    const double rate = 120.0;  // the simulator's default capture rate
+    const double span = t["v2_centre_s"].get<double>() - t["v1_centre_s"].get<double>();
+    EXPECT_NEAR(static_cast<double>(t["k"].size()), span * rate, 1.5);
+    const double centre = 0.5 * (t["c_start_s"].get<double>() + t["c_end_s"].get<double>());
+    size_t nearest = 0;
+    for (size_t i = 0; i < t["k"].size(); ++i)
+      if (std::abs(t["k_times_s"][i].get<double>() - centre) < std::abs(t["k_times_s"][nearest].get<double>() - centre))
+        nearest = i;
+    at_centre.push_back(t["k"][nearest].get<double>());
+    at_vowels.push_back(t["k"].front().get<double>());
+    at_vowels.push_back(t["k"].back().get<double>());
+  }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  EXPECT_NEAR(median(at_centre), 1.0, 0.15);
+  EXPECT_NEAR(median(at_vowels), 0.0, 0.15);
   // The file holds the result's fit, and reads back.
   EXPECT_EQ(json::parse(ReadTextFile(o.output)), fit);
   EXPECT_EQ(OhmanFitFromJson(fit, o.output).consonants.size(), 3u);

@@ -158,14 +158,17 @@ json OhmanFitToJson(const OhmanFit& fit, const std::vector<std::string>& paramet
     const std::string take = t.series >= 0 && static_cast<size_t>(t.series) < take_names.size()
                                  ? take_names[static_cast<size_t>(t.series)]
                                  : "";
-    j["tokens"].push_back({{"take", take},
-                           {"vowel", t.vowel},
-                           {"consonant", t.consonant},
-                           {"v1_centre_s", t.v1_centre_s},
-                           {"c_start_s", t.c_start_s},
-                           {"c_end_s", t.c_end_s},
-                           {"v2_centre_s", t.v2_centre_s},
-                           {"realisation_s", t.realisation_s}});
+    j["tokens"].push_back(
+        {{"take", take},
+         {"vowel", t.vowel},
+         {"consonant", t.consonant},
+         {"v1_centre_s", t.v1_centre_s},
+         {"c_start_s", t.c_start_s},
+         {"c_end_s", t.c_end_s},
+         {"v2_centre_s", t.v2_centre_s},
+         {"realisation_s", t.realisation_s},
+         {"k_times_s", t.k_times_s},
+         {"k", Vector(Eigen::Map<const Eigen::VectorXd>(t.k.data(), static_cast<Eigen::Index>(t.k.size())))}});
   }
   j["warnings"] = fit.warnings;
   return j;

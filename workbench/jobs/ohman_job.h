@@ -50,7 +50,8 @@ std::string OhmanText(const nlohmann::json& result);
 // {"left_inset_s", "left_ramp_s", "right_inset_s", "right_ramp_s", "rms",
 // "samples"}, "mean_k": {"times_s", "k"}}], "tokens": [{"take", "vowel",
 // "consonant", "v1_centre_s", "c_start_s", "c_end_s", "v2_centre_s",
-// "realisation_s"}], "warnings"}.
+// "realisation_s", "k_times_s", "k" (pooled k per frame, null where
+// undefined)}], "warnings"}.
 nlohmann::json OhmanFitToJson(const coarticulation::OhmanFit& fit, const std::vector<std::string>& parameter_names,
                               const std::vector<std::string>& take_names);
 // Reads it back (tokens are not read: generation does not need them).
