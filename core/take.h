@@ -94,6 +94,47 @@ struct Audio {
   double duration_s() const { return rate_hz > 0 ? static_cast<double>(frames()) / rate_hz : 0.0; }
 };
 
+// Global joint orientations of a skeleton capture (BVH), frames × joints × 4
+// (w, x, y, z), row-major (frame slowest), float32: the unit quaternion that
+// rotates the joint's own axes into the lab frame. Joint j is marker j of its
+// take (the marker holds the joint's position); NaN when unknown.
+class OrientationArray {
+ public:
+  OrientationArray() = default;
+  OrientationArray(int64_t frames, int64_t joints)
+      : frames_(frames), joints_(joints), data_(static_cast<size_t>(frames * joints * 4), kMissing) {}
+
+  int64_t frames() const { return frames_; }
+  int64_t joints() const { return joints_; }
+  bool empty() const { return frames_ == 0 || joints_ == 0; }
+  // Pointer to (w, x, y, z) of one joint in one frame.
+  float* at(int64_t frame, int64_t joint) { return &data_[Index(frame, joint)]; }
+  const float* at(int64_t frame, int64_t joint) const { return &data_[Index(frame, joint)]; }
+  std::vector<float>& data() { return data_; }
+  const std::vector<float>& data() const { return data_; }
+  void Resize(int64_t frames, int64_t joints) {
+    frames_ = frames;
+    joints_ = joints;
+    data_.assign(static_cast<size_t>(frames * joints * 4), kMissing);
+  }
+
+ private:
+  size_t Index(int64_t frame, int64_t joint) const { return static_cast<size_t>((frame * joints_ + joint) * 4); }
+  int64_t frames_ = 0;
+  int64_t joints_ = 0;
+  std::vector<float> data_;
+};
+
+// One joint of a skeleton hierarchy (BVH HIERARCHY section). Joints are listed
+// parents first (a parent's index is smaller than its children's).
+struct SkeletonJoint {
+  std::string name;
+  int parent = -1;                        // index of the parent joint, -1 for a root
+  double offset_mm[3] = {0.0, 0.0, 0.0};  // from the parent, in the parent's axes (mm)
+  std::vector<std::string> channels;      // in file order: "Xposition", "Zrotation", ... (none for end sites)
+  bool end_site = false;                  // a BVH "End Site" (no channels, no children)
+};
+
 struct SourceFile {
   std::string path;    // as given at import
   std::string sha256;  // hex of the file's bytes
@@ -123,6 +164,11 @@ struct Take {
   // The marker-set definition (JSON text) given at import, "" when none; the
   // corpus keeps it with the take (attribute "markerset").
   std::string markerset_json;
+  // Skeleton captures (BVH) only, empty otherwise: the hierarchy (joint j is
+  // marker j: marker_names[j] == skeleton[j].name) and the global orientation
+  // of every joint in every frame (end sites carry their parent's).
+  std::vector<SkeletonJoint> skeleton;
+  OrientationArray orientations;
 
   int64_t frames() const { return markers.frames(); }
   double duration_s() const { return rate_hz > 0 ? static_cast<double>(frames()) / rate_hz : 0.0; }

@@ -1,4 +1,4 @@
-// The analysis figures (gestural score, histograms, confusion matrix, curves) written to
+// The analysis figures (gestural score, histograms, confusion matrix) written to
 // PNG and SVG and checked in the files: sizes, the shaded cells where the counts
 // put them, the statistics each histogram panel prints (computed here by hand),
 // and one clear error for bad data.
@@ -141,46 +141,6 @@ TEST(GesturalScore, LanesTiersAndWaveformShareTheTimeAxis) {
   EXPECT_THROW(SaveGesturalScore((dir / "b.png").string(), "t", {}, 0, 0, {bad}, 100, {}, 0, 2), InvalidInput);
   EXPECT_THROW(SaveGesturalScore((dir / "b.png").string(), "t", {}, 0, 0, {lane}, 100, {}, 2, 1), InvalidInput);
   EXPECT_THROW(SaveGesturalScore((dir / "b.png").string(), "t", {}, 0, 0, {}, 100, {}, 0, 1), InvalidInput);
-}
-
-TEST(Curves, SeriesAreColouredAndNaNBreaksTheLine) {
-  testing::TempDir dir;
-  // x 0..4 at y 0.5; "broken" leaves out (NaN) the points of x in (1, 3).
-  CurveSeries whole{"whole", {}, {}, false}, broken{"broken", {}, {}, false};
-  for (int i = 0; i <= 40; ++i) {
-    const double x = i / 10.0;
-    whole.x.push_back(x);
-    whole.y.push_back(0.5);
-    broken.x.push_back(x);
-    broken.y.push_back(x > 1.0 && x < 3.0 ? std::nan("") : 0.5);
-  }
-  CurveSeries model{"model", {0, 4}, {1, 1}, true};
-  SaveCurves((dir / "whole.png").string(), "k", "ms", "k", {whole, model}, -0.2, 1.2);
-  SaveCurves((dir / "broken.png").string(), "k", "ms", "k", {broken, model}, -0.2, 1.2);
-  const QImage a = LoadPng(dir / "whole.png"), b = LoadPng(dir / "broken.png");
-  EXPECT_EQ(a.width(), 900);
-  EXPECT_EQ(a.height(), 560);
-  // The first series is drawn in the first palette colour (red); the broken
-  // one lacks half of its line (the gap spans 2 of the 4 units of x).
-  auto reddish = [](const QImage& image) {  // the antialiased line: red clearly above green and blue
-    int n = 0;
-    for (int y = 0; y < image.height(); ++y)
-      for (int x = 0; x < image.width(); ++x) {
-        const QRgb p = image.pixel(x, y);
-        if (qRed(p) > 150 && qGreen(p) < 140 && qBlue(p) < 140) ++n;
-      }
-    return n;
-  };
-  const int red_whole = reddish(a), red_broken = reddish(b);
-  EXPECT_GT(red_whole, 300);
-  EXPECT_LT(red_broken, 0.7 * red_whole);
-  EXPECT_GT(red_broken, 0.3 * red_whole);
-  EXPECT_THROW(SaveCurves((dir / "x.png").string(), "k", "ms", "k", {}, 0, 1), InvalidInput);
-  CurveSeries bad{"bad", {0, 1}, {0}, false};
-  EXPECT_THROW(SaveCurves((dir / "x.png").string(), "k", "ms", "k", {bad}, 0, 1), InvalidInput);
-  EXPECT_THROW(SaveCurves((dir / "x.png").string(), "k", "ms", "k", {whole}, 1, 1), InvalidInput);
-  CurveSeries empty{"nan", {std::nan("")}, {0}, false};
-  EXPECT_THROW(SaveCurves((dir / "x.png").string(), "k", "ms", "k", {empty}, 0, 1), InvalidInput);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "workbench/jobs/model_jobs.h"
 #include "workbench/jobs/ohman_job.h"
 #include "workbench/jobs/phasing_job.h"
+#include "workbench/jobs/transitions_job.h"
 
 namespace csw::cli {
 
@@ -602,6 +603,59 @@ class OhmanCommand : public Command {
   bool json_ = false;
 };
 
+class TransitionsCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("transitions",
+                              "Sign-language transitions: durations and posture distances per hand, statistics per "
+                              "transition type, and the duration models SIMPLE, SIMPLE_BOUNDED, LINEAR and SURFACE "
+                              "fitted and cross-validated (docs/transitions.md)");
+    sub_->add_option("corpus", options_.corpus, "Corpus file (skeleton captures: BVH or csw simulate signs)")
+        ->required();
+    sub_->add_option("--takes", options_.takes,
+                     "Takes, comma-separated names or glob patterns; default every take but fill versions");
+    sub_->add_option("--tiers", options_.tiers, "Sign/transition interval tiers, one per hand")
+        ->delimiter(',')
+        ->capture_default_str();
+    sub_->add_option("--types", options_.types, "Sign-type interval tier (00, 10, 11, 20 or one_hand, ...); '' = none")
+        ->capture_default_str();
+    sub_->add_option("--wrists", options_.wrists,
+                     "TIER=JOINT pairs naming each hand tier's wrist joint (default: found by name and side)")
+        ->delimiter(',');
+    sub_->add_option("--joints", options_.joints, "Joints averaged: arm (the hand's arm, shoulder to tips) or all")
+        ->capture_default_str();
+    sub_->add_option("--length-unit", options_.length_unit, "Unit of Euclidean distances: m, dm, cm or mm")
+        ->capture_default_str();
+    sub_->add_option("--models", options_.models, "Duration models: simple, simple_bounded, linear, surface")
+        ->delimiter(',')
+        ->capture_default_str();
+    sub_->add_option("--folds", options_.folds, "Cross-validation folds")->capture_default_str();
+    sub_->add_option("--min-s", options_.model.min_s, "SIMPLE_BOUNDED lower limit (s)")->capture_default_str();
+    sub_->add_option("--max-s", options_.model.max_s, "SIMPLE_BOUNDED upper limit (s)")->capture_default_str();
+    sub_->add_option("--max-transition-s", options_.transition.max_transition_s,
+                     "A longer gap between two signs is a pause, not a transition (s)")
+        ->capture_default_str();
+    sub_->add_option("-o,--output", options_.output, "Save the fitted models (JSON)");
+    sub_->add_option("--csv", options_.csv, "Write one row per transition");
+    sub_->add_option("--figures", options_.figures, "Folder for the figure transitions.png");
+    sub_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::Transitions(options_, progress);
+    if (json_) {
+      PrintJson(r);
+    } else {
+      std::cout << jobs::TransitionsText(r);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::TransitionsOptions options_;
+  bool json_ = false;
+};
+
 class PackCommand : public Command {
  public:
   void Register(CLI::App& app) override {
@@ -665,6 +719,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<KeysCommand>());
   c.push_back(std::make_unique<PhasingCommand>());
   c.push_back(std::make_unique<OhmanCommand>());
+  c.push_back(std::make_unique<TransitionsCommand>());
   c.push_back(std::make_unique<PackCommand>());
   c.push_back(std::make_unique<UpgradeCommand>());
   return c;

@@ -128,10 +128,9 @@ void SaveConfusionMatrix(const std::string& path, const std::string& title, cons
   Check(Api().save_confusion_matrix(path, title, labels, counts, true_axis, recognised_axis));
 }
 
-void SaveCurves(const std::string& path, const std::string& title, const std::string& x_label,
-                const std::string& y_label, const std::vector<report::CurveSeries>& series, double y_min,
-                double y_max) {
-  Check(Api().save_curves(path, title, x_label, y_label, series, y_min, y_max));
+void SavePlots(const std::string& path, const std::string& title, const std::vector<report::PlotPanel>& panels,
+               int columns) {
+  Check(Api().save_plots(path, title, panels, columns));
 }
 
 }  // namespace csw::jobs::figures

@@ -43,7 +43,7 @@ void SaveConfusionMatrix(const std::string& path, const std::string& title, cons
                          const std::vector<std::vector<int>>& counts, const std::string& true_axis = "true class",
                          const std::string& recognised_axis = "recognised class");
 
-void SaveCurves(const std::string& path, const std::string& title, const std::string& x_label,
-                const std::string& y_label, const std::vector<report::CurveSeries>& series, double y_min, double y_max);
+void SavePlots(const std::string& path, const std::string& title, const std::vector<report::PlotPanel>& panels,
+               int columns = 0);
 
 }  // namespace csw::jobs::figures

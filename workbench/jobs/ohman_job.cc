@@ -342,23 +342,28 @@ json Ohman(const OhmanJobOptions& options, Progress& progress) {
   if (!options.figures.empty()) {
     fs::create_directories(options.figures);
     for (const OhmanConsonant& c : fit.consonants) {
-      std::vector<report::CurveSeries> curves;
+      report::PlotPanel panel;
+      panel.x_label = "time from the consonant centre (ms)";
+      panel.y_label = "k";
+      panel.y_min = -0.2;
+      panel.y_max = 1.2;
+      panel.vertical_marks = {0.0};
       for (const std::string& v : c.vowels) {
-        report::CurveSeries cs;
-        cs.name = "[" + v + c.consonant + v + "]";
+        report::PlotSeries ps;
+        ps.name = "[" + v + c.consonant + v + "]";
         for (const coarticulation::VcvToken& t : fit.tokens) {
           if (t.consonant != c.consonant || t.vowel != v) continue;
           const double centre = 0.5 * (t.c_start_s + t.c_end_s);
-          if (!cs.x.empty()) {
-            cs.x.push_back(std::nan(""));
-            cs.y.push_back(std::nan(""));
+          if (!ps.x.empty()) {  // a NaN point breaks the line between tokens
+            ps.x.push_back(std::nan(""));
+            ps.y.push_back(std::nan(""));
           }
           for (size_t k = 0; k < t.k.size(); ++k) {
-            cs.x.push_back(1000.0 * (t.k_times_s[k] - centre));
-            cs.y.push_back(t.k[k]);
+            ps.x.push_back(1000.0 * (t.k_times_s[k] - centre));
+            ps.y.push_back(t.k[k]);
           }
         }
-        curves.push_back(std::move(cs));
+        panel.series.push_back(std::move(ps));
       }
       // The stylised k for a consonant of the mean token duration.
       double dur = 0;
@@ -366,17 +371,16 @@ json Ohman(const OhmanJobOptions& options, Progress& progress) {
       for (const coarticulation::VcvToken& t : fit.tokens)
         if (t.consonant == c.consonant) dur += t.c_end_s - t.c_start_s, ++n;
       dur /= std::max(1, n);
-      report::CurveSeries style;
+      report::PlotSeries style;
       style.name = "stylised (mean duration)";
-      style.dashed = true;
+      style.style = report::PlotSeries::Style::kDashed;
       for (double tau = -0.2; tau <= 0.2 + 1e-9; tau += 0.002) {
         style.x.push_back(1000.0 * tau);
         style.y.push_back(c.k_style.Evaluate(tau, -0.5 * dur, 0.5 * dur));
       }
-      curves.push_back(std::move(style));
+      panel.series.push_back(std::move(style));
       const std::string path = (fs::path(options.figures) / ("ohman_k_" + c.consonant + ".png")).string();
-      figures::SaveCurves(path, "Emergence k(t) of [" + c.consonant + "] in its contexts",
-                          "time from the consonant centre (ms)", "k", curves, -0.2, 1.2);
+      figures::SavePlots(path, "Emergence k(t) of [" + c.consonant + "] in its contexts", {panel}, 1);
       result["figures"].push_back(path);
     }
   }

@@ -395,60 +395,104 @@ void SaveConfusionMatrix(const std::string& path, const std::string& title, cons
   plot.Save(path);
 }
 
-void SaveCurves(const std::string& path, const std::string& title, const std::string& x_label,
-                const std::string& y_label, const std::vector<CurveSeries>& series, double y_min, double y_max) {
+void SavePlots(const std::string& path, const std::string& title, const std::vector<PlotPanel>& panels, int columns) {
   FigureFormat(Q(path));
-  if (series.empty()) throw InvalidInput(path + ": no curve to draw");
-  if (!(y_max > y_min)) throw InvalidInput(path + ": the y range is empty");
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (const CurveSeries& c : series) {
-    if (c.x.size() != c.y.size()) throw InvalidInput(path + ": curve '" + c.name + "': x and y differ in length");
-    for (size_t i = 0; i < c.x.size(); ++i)
-      if (std::isfinite(c.x[i]) && std::isfinite(c.y[i])) lo = std::min(lo, c.x[i]), hi = std::max(hi, c.x[i]);
+  if (panels.empty()) throw InvalidInput(path + ": no panel to draw");
+  for (const PlotPanel& p : panels) {
+    bool any = false;
+    for (const PlotSeries& s : p.series) {
+      if (s.x.size() != s.y.size()) {
+        throw InvalidInput(path + ": panel '" + p.title + "', series '" + s.name + "': x and y differ in length");
+      }
+      for (size_t i = 0; i < s.x.size(); ++i) {
+        if (std::isinf(s.x[i]) || std::isinf(s.y[i])) {
+          throw InvalidInput(path + ": panel '" + p.title + "', series '" + s.name + "': an infinite coordinate");
+        }
+        any = any || (std::isfinite(s.x[i]) && std::isfinite(s.y[i]));
+      }
+    }
+    if (!any) throw InvalidInput(path + ": panel '" + p.title + "' has no point to draw");
+    if (std::isfinite(p.y_min) && std::isfinite(p.y_max) && !(p.y_max > p.y_min)) {
+      throw InvalidInput(path + ": panel '" + p.title + "': y_max must be above y_min");
+    }
   }
-  if (!std::isfinite(lo)) throw InvalidInput(path + ": no finite point to draw");
-  if (hi == lo) lo -= 1, hi += 1;
   EnsureGuiApplication();
-  static const Rgb kColours[] = {{215, 40, 40}, {30, 80, 220}, {30, 150, 60}, {235, 130, 30}, {140, 60, 170}};
-  Canvas plot(900, 560);
-  plot.setAutoAddPlottableToLegend(false);
-  QCPAxisRect* rect = plot.axisRect();
-  StyleAxes(rect);
-  QCPAxis* xa = rect->axis(QCPAxis::atBottom);
-  QCPAxis* ya = rect->axis(QCPAxis::atLeft);
-  xa->setLabel(Q(x_label));
-  ya->setLabel(Q(y_label));
-  xa->setRange(lo, hi);
-  ya->setRange(y_min, y_max);
-  AddLine(plot, rect, lo, 0, hi, 0, QPen(QColor(0, 0, 0), 1));
-  AddLine(plot, rect, lo, 1, hi, 1, QPen(QColor(160, 160, 160), 1, Qt::DotLine));
-  AddLine(plot, rect, 0, y_min, 0, y_max, QPen(QColor(160, 160, 160), 1, Qt::DotLine));
-  QCPLegend* legend = plot.legend;
-  size_t colour = 0;
-  for (const CurveSeries& c : series) {
-    const QPen pen = c.dashed ? QPen(QColor(20, 20, 20), 2.5, Qt::DashLine)
-                              : QPen(Colour(kColours[colour++ % std::size(kColours)]), 1.6);
-    QCPGraph* first = nullptr;
-    QCPGraph* g = nullptr;
-    for (size_t i = 0; i <= c.x.size(); ++i) {
-      const bool ok = i < c.x.size() && std::isfinite(c.x[i]) && std::isfinite(c.y[i]);
-      if (!ok) {
-        g = nullptr;
-        continue;
+  const int n = static_cast<int>(panels.size());
+  const int cols = columns > 0 ? std::min(columns, n) : std::min(2, n);
+  const int rows = (n + cols - 1) / cols;
+  Canvas plot(std::max(700, 480 * cols), 90 + 360 * rows);
+  plot.plotLayout()->clear();
+  auto* grid = new QCPLayoutGrid;
+  plot.plotLayout()->addElement(0, 0, grid);
+  auto* margins = new QCPMarginGroup(&plot);
+  std::vector<std::pair<std::string, QCPGraph*>> legend_entries;
+  for (int i = 0; i < n; ++i) {
+    const PlotPanel& p = panels[static_cast<size_t>(i)];
+    auto* cell = new QCPLayoutGrid;
+    grid->addElement(i / cols, i % cols, cell);
+    cell->addElement(0, 0, new QCPTextElement(&plot, Q(p.title), Font(9, true)));
+    auto* rect = new QCPAxisRect(&plot);
+    cell->addElement(1, 0, rect);
+    cell->setRowStretchFactors({0.001, 1});
+    rect->setMarginGroup(QCP::msLeft, margins);
+    StyleAxes(rect);
+    double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo, y_lo = x_lo, y_hi = -x_lo;
+    for (size_t k = 0; k < p.series.size(); ++k) {
+      const PlotSeries& s = p.series[k];
+      QVector<double> xs, ys;
+      for (size_t j = 0; j < s.x.size(); ++j) {
+        xs.push_back(s.x[j]);
+        ys.push_back(s.y[j]);
+        if (std::isfinite(s.x[j]) && std::isfinite(s.y[j])) {
+          x_lo = std::min(x_lo, s.x[j]);
+          x_hi = std::max(x_hi, s.x[j]);
+          y_lo = std::min(y_lo, s.y[j]);
+          y_hi = std::max(y_hi, s.y[j]);
+        }
       }
-      if (g == nullptr) {
-        g = new QCPGraph(xa, ya);
-        g->setPen(pen);
-        if (first == nullptr) first = g;
+      QCPGraph* g = AddGraph(plot, rect);
+      const QColor colour = ClassColour(s.colour >= 0 ? s.colour : static_cast<int>(k));
+      if (s.style == PlotSeries::Style::kPoints) {
+        g->setLineStyle(QCPGraph::lsNone);
+        g->setScatterStyle(QCPScatterStyle(QCPScatterStyle::ssDisc, colour, colour, 5));
+        g->setPen(QPen(colour));
+      } else {
+        g->setPen(QPen(colour, 2, s.style == PlotSeries::Style::kDashed ? Qt::DashLine : Qt::SolidLine));
       }
-      g->addData(c.x[i], c.y[i]);
+      g->setData(xs, ys, true);
+      g->removeFromLegend();
+      if (!s.name.empty() && std::none_of(legend_entries.begin(), legend_entries.end(),
+                                          [&](const auto& e) { return e.first == s.name; })) {
+        legend_entries.emplace_back(s.name, g);
+      }
     }
-    if (first != nullptr) {
-      first->setName(Q(c.name));
-      legend->addItem(new QCPPlottableLegendItem(legend, first));
+    const double x_pad = x_hi > x_lo ? 0.03 * (x_hi - x_lo) : 1.0;
+    double y_pad = y_hi > y_lo ? 0.08 * (y_hi - y_lo) : 1.0;
+    if (std::isfinite(p.y_min) && std::isfinite(p.y_max)) {
+      y_lo = p.y_min;
+      y_hi = p.y_max;
+      y_pad = 0;
+    }
+    rect->axis(QCPAxis::atBottom)->setRange(x_lo - x_pad, x_hi + x_pad);
+    rect->axis(QCPAxis::atLeft)->setRange(y_lo - y_pad, y_hi + y_pad);
+    rect->axis(QCPAxis::atBottom)->setLabel(Q(p.x_label));
+    rect->axis(QCPAxis::atLeft)->setLabel(Q(p.y_label));
+    for (double x : p.vertical_marks) {
+      if (std::isfinite(x))
+        AddLine(plot, rect, x, y_lo - y_pad, x, y_hi + y_pad, QPen(QColor(120, 120, 120), 1, Qt::DashLine));
     }
   }
-  AddHeader(plot, title, legend);
+  if (!legend_entries.empty()) {
+    auto* legend = new QCPLegend;
+    AddHeader(plot, title, legend);
+    legend->setLayer(QStringLiteral("legend"));
+    for (auto& [name, g] : legend_entries) {
+      g->setName(Q(name));
+      g->addToLegend(legend);
+    }
+  } else {
+    AddHeader(plot, title, nullptr);
+  }
   plot.Save(path);
 }
 

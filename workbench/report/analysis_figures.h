@@ -59,18 +59,34 @@ void SaveConfusionMatrix(const std::string& path, const std::string& title, cons
                          const std::vector<std::vector<int>>& counts, const std::string& true_axis = "true class",
                          const std::string& recognised_axis = "recognised class");
 
-// Curves on one plot (e.g. the Öhman emergence k(t) of one consonant in its
-// vowel contexts): each series a colour and one legend entry; NaN in x or y
-// breaks a series' line (several tokens in one series). Dashed series are
-// drawn in black (a model curve over the data). y from y_min to y_max; x
-// from the data. InvalidInput: no series, x and y of different lengths, no
-// finite point, y_max <= y_min.
-struct CurveSeries {
+// One series of an x-y panel: a line, dashed line or points, with its legend
+// name ("" = not in the legend). Points with a NaN coordinate are left out
+// (lines break there).
+struct PlotSeries {
+  enum class Style { kLine, kDashed, kPoints };
   std::string name;
   std::vector<double> x, y;
-  bool dashed = false;
+  Style style = Style::kLine;
+  int colour = -1;  // index in the qualitative palette; -1 = the series' order in its panel
 };
-void SaveCurves(const std::string& path, const std::string& title, const std::string& x_label,
-                const std::string& y_label, const std::vector<CurveSeries>& series, double y_min, double y_max);
+
+// One panel of SavePlots: series, optional vertical marks (thin dashed grey
+// lines at these x, e.g. boundaries), axis labels.
+struct PlotPanel {
+  std::string title;
+  std::string x_label, y_label;
+  std::vector<PlotSeries> series;
+  std::vector<double> vertical_marks;
+  // The y range; NaN (default) = from the data.
+  double y_min = std::numeric_limits<double>::quiet_NaN();
+  double y_max = std::numeric_limits<double>::quiet_NaN();
+};
+
+// A grid of x-y panels (`columns` per row; 0 = up to two) with one legend of
+// every named series. InvalidInput: no panel, a series whose x and y differ in
+// length, an infinite coordinate, a panel with no finite point, a given y
+// range with y_max <= y_min.
+void SavePlots(const std::string& path, const std::string& title, const std::vector<PlotPanel>& panels,
+               int columns = 0);
 
 }  // namespace csw::report

@@ -45,10 +45,9 @@ struct FiguresApi {
                                        const std::vector<std::string>& labels,
                                        const std::vector<std::vector<int>>& counts, const std::string& true_axis,
                                        const std::string& recognised_axis) = nullptr;
-  // Version 4: curves (the Öhman emergence figures).
-  std::string (*save_curves)(const std::string& path, const std::string& title, const std::string& x_label,
-                             const std::string& y_label, const std::vector<CurveSeries>& series, double y_min,
-                             double y_max) = nullptr;
+  // Version 4: x-y panels (analysis_figures.h, SavePlots).
+  std::string (*save_plots)(const std::string& path, const std::string& title, const std::vector<PlotPanel>& panels,
+                            int columns) = nullptr;
 };
 
 }  // namespace csw::report

@@ -71,10 +71,9 @@ std::string SaveConfusionMatrix(const std::string& path, const std::string& titl
   return Guarded([&] { csw::report::SaveConfusionMatrix(path, title, labels, counts, true_axis, recognised_axis); });
 }
 
-std::string SaveCurves(const std::string& path, const std::string& title, const std::string& x_label,
-                       const std::string& y_label, const std::vector<csw::report::CurveSeries>& series, double y_min,
-                       double y_max) {
-  return Guarded([&] { csw::report::SaveCurves(path, title, x_label, y_label, series, y_min, y_max); });
+std::string SavePlots(const std::string& path, const std::string& title,
+                      const std::vector<csw::report::PlotPanel>& panels, int columns) {
+  return Guarded([&] { csw::report::SavePlots(path, title, panels, columns); });
 }
 
 }  // namespace
@@ -89,6 +88,6 @@ extern "C" __attribute__((visibility("default"))) const csw::report::FiguresApi*
                                            &SaveGesturalScore,
                                            &SaveHistograms,
                                            &SaveConfusionMatrix,
-                                           &SaveCurves};
+                                           &SavePlots};
   return &api;
 }
