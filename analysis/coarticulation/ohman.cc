@@ -522,7 +522,7 @@ std::vector<Anchor> CarrierAnchors(const OhmanFit& fit, const std::vector<Label>
       anchors.push_back({0.5 * (ph.start_s + ph.end_s), fit.vowel_targets.row(vi).transpose()});
       continue;
     }
-    if (!fit.Find(ph.text)) {
+    if (!fit.Find(ph.text) && !options.skip_unknown) {
       throw InvalidInput("Öhman generation: phone '" + ph.text + "' at " + std::to_string(ph.start_s) +
                          " s is neither a vowel nor a consonant of the fit");
     }
@@ -579,6 +579,7 @@ Eigen::MatrixXd GenerateOhman(const OhmanFit& fit, const std::vector<Label>& pho
   for (const Label& ph : phones) {
     if (IsPauseLabel(ph.text) || fit.VowelIndex(ph.text) >= 0) continue;
     const OhmanConsonant* c = fit.Find(ph.text);
+    if (c == nullptr) continue;  // unknown and skipped (OhmanCarrier threw otherwise)
     occ.push_back({c, ph.start_s, ph.end_s, c->measured_effect.colwise().mean().transpose()});
   }
   const Eigen::Index P = fit.num_parameters;

@@ -164,12 +164,16 @@ struct GenerateOptions {
   // pause_inset_s inside each of its edges; a shorter one at its centre.
   double pause_inset_s = 0.06;
   double lead_s = 0.1;  // rest anchors this far outside the first and last phones
+  // Phones the fit does not know (neither a vowel context nor a fitted
+  // consonant nor a pause): false = InvalidInput; true = left out (no anchor,
+  // no consonant effect).
+  bool skip_unknown = false;
   std::string Check() const;
 };
 
 // Parameter trajectories (times × P) for phones (vowels of fit.vowels,
 // consonants of fit.consonants, pauses) at the given times. InvalidInput
-// naming the phone for a phone the fit does not know.
+// naming the phone for a phone the fit does not know (unless skip_unknown).
 Eigen::MatrixXd GenerateOhman(const OhmanFit& fit, const std::vector<Label>& phones, const std::vector<double>& times_s,
                               const GenerateOptions& options = {});
 

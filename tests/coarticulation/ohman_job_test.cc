@@ -87,7 +87,12 @@ json SmallResult() {
               {"warnings", {"vowel 'i' never occurs alone"}}};
   return {{"corpus", "c.h5"},
           {"models", "m.h5"},
-          {"takes", {{{"take", "vcv"}, {"frames", 100}, {"solved_frames", 98}, {"tokens", 2}}}},
+          {"takes",
+           {{{"take", "vcv"},
+             {"frames", 100},
+             {"solved_frames", 98},
+             {"tokens", 2},
+             {"generation", {{"correlation", {0.9876}}, {"rms", {0.1}}, {"unknown_phones", {"j"}}}}}}},
           {"skipped", {{{"take", "other"}, {"reason", "no interval tier 'phones' (tiers: none)"}}}},
           {"fit", fit},
           {"summary", {{"tokens", 2}, {"consonants", 1}, {"parameters", 1}, {"identifiable", 0}}},
@@ -98,7 +103,7 @@ json SmallResult() {
 TEST(OhmanText, RendersTheReport) {
   EXPECT_EQ(OhmanText(SmallResult()),
             "Öhman coarticulation model: 2 VCV tokens, 1 consonants, 1 parameters (face model m.h5)\n"
-            "  take vcv: 2 tokens, 98/100 frames solved\n"
+            "  take vcv: 2 tokens, 98/100 frames solved; generated vs inverted r: 0.988 (left out: j)\n"
             "  skipped other: no interval tier 'phones' (tiers: none)\n"
             "Vowel references:\n"
             "  a (isolated, 2): 1.500\n"
@@ -247,6 +252,15 @@ TEST(OhmanJob, FitsVirtualCuerTakesAndWritesTheFitFile) {
   };
   EXPECT_NEAR(median(at_centre), 1.0, 0.15);
   EXPECT_NEAR(median(at_vowels), 0.0, 0.15);
+  // Trajectories regenerated from the fit follow the inverted ones: the first
+  // parameter (most of the variance) correlates >= 0.95 in every VCV take.
+  for (const json& t : r["takes"]) {
+    ASSERT_TRUE(t.contains("generation")) << t;
+    EXPECT_TRUE(t["generation"]["unknown_phones"].empty()) << t;
+    if (t["take"] != "vowels") {
+      EXPECT_GE(t["generation"]["correlation"][0].get<double>(), 0.95) << t;
+    }
+  }
   // The file holds the result's fit, and reads back.
   EXPECT_EQ(json::parse(ReadTextFile(o.output)), fit);
   EXPECT_EQ(OhmanFitFromJson(fit, o.output).consonants.size(), 3u);
@@ -255,7 +269,7 @@ TEST(OhmanJob, FitsVirtualCuerTakesAndWritesTheFitFile) {
       << text;
   EXPECT_NE(text.find("[ʃ] 3 tokens"), std::string::npos) << text;
 #ifdef CSW_FIGURES_MODULE_FILE
-  ASSERT_EQ(r["figures"].size(), 3u);
+  ASSERT_EQ(r["figures"].size(), 3u + 3u);  // k(t) per consonant, trajectories per VCV take
   for (const json& f : r["figures"]) {
     std::ifstream in(f.get<std::string>(), std::ios::binary);
     char h[4] = {};

@@ -338,9 +338,74 @@ json Ohman(const OhmanJobOptions& options, Progress& progress) {
                        {"parameters", fit.num_parameters},
                        {"identifiable", identifiable},
                        {"consonant_parameters", cells}};
+  // Trajectories regenerated from the fit for every take, against the inverted
+  // parameters (in-sample: the MOTHER paper's Figure 9).
+  struct Regenerated {
+    std::vector<double> times;
+    std::vector<Eigen::Index> rows;
+    Eigen::MatrixXd generated, carrier;
+  };
+  std::vector<Regenerated> regenerated(series.size());
+  for (size_t i = 0; i < series.size(); ++i) {
+    const coarticulation::ParameterSeries& s = series[i];
+    Regenerated& g = regenerated[i];
+    for (Eigen::Index f = 0; f < s.values.rows(); ++f)
+      if (s.values.row(f).allFinite()) g.times.push_back(static_cast<double>(f) / s.rate_hz), g.rows.push_back(f);
+    json& tj = result["takes"][i];
+    const std::vector<Label> phones =
+        coarticulation::NormalisePhones(s.phones, static_cast<double>(s.values.rows()) / s.rate_hz);
+    coarticulation::GenerateOptions lenient;
+    lenient.skip_unknown = true;
+    std::set<std::string> unknown;
+    for (const Label& l : phones)
+      if (!coarticulation::IsPauseLabel(l.text) && fit.VowelIndex(l.text) < 0 && !fit.Find(l.text))
+        unknown.insert(l.text);
+    g.generated = coarticulation::GenerateOhman(fit, phones, g.times, lenient);
+    g.carrier = coarticulation::OhmanCarrier(fit, phones, g.times, lenient);
+    json corr = json::array(), rms = json::array();
+    for (int x = 0; x < fit.num_parameters; ++x) {
+      Eigen::VectorXd obs(static_cast<Eigen::Index>(g.rows.size()));
+      for (size_t k = 0; k < g.rows.size(); ++k) obs[static_cast<Eigen::Index>(k)] = s.values(g.rows[k], x);
+      const Eigen::VectorXd gen = g.generated.col(x);
+      const Eigen::VectorXd da = obs.array() - obs.mean(), db = gen.array() - gen.mean();
+      const double den = std::sqrt(da.squaredNorm() * db.squaredNorm());
+      corr.push_back(den > 0 ? json(da.dot(db) / den) : json(nullptr));
+      rms.push_back(obs.size() > 0 ? json(std::sqrt((gen - obs).squaredNorm() / static_cast<double>(obs.size())))
+                                   : json(nullptr));
+    }
+    tj["generation"] = {{"correlation", corr}, {"rms", rms}, {"unknown_phones", unknown}};
+  }
+
   result["figures"] = json::array();
   if (!options.figures.empty()) {
     fs::create_directories(options.figures);
+    for (size_t i = 0; i < series.size(); ++i) {
+      const Regenerated& g = regenerated[i];
+      if (result["takes"][i]["tokens"].get<int>() == 0 || g.generated.rows() == 0) continue;
+      std::vector<report::PlotPanel> panels;
+      for (int x = 0; x < fit.num_parameters; ++x) {
+        report::PlotPanel panel;
+        panel.title = x < static_cast<int>(params.size()) ? params[static_cast<size_t>(x)] : "";
+        panel.x_label = "time (s)";
+        report::PlotSeries obs{"inverted", {}, {}, report::PlotSeries::Style::kLine, 0};
+        report::PlotSeries carrier{"vocalic carrier v", {}, {}, report::PlotSeries::Style::kLine, 7};
+        report::PlotSeries gen{"generated", {}, {}, report::PlotSeries::Style::kDashed, 3};
+        for (size_t k = 0; k < g.rows.size(); ++k) {
+          const double t = g.times[k];
+          obs.x.push_back(t);
+          obs.y.push_back(series[i].values(g.rows[k], x));
+          carrier.x.push_back(t);
+          carrier.y.push_back(g.carrier(static_cast<Eigen::Index>(k), x));
+          gen.x.push_back(t);
+          gen.y.push_back(g.generated(static_cast<Eigen::Index>(k), x));
+        }
+        panel.series = {std::move(carrier), std::move(obs), std::move(gen)};
+        panels.push_back(std::move(panel));
+      }
+      const std::string path = (fs::path(options.figures) / ("ohman_generated_" + take_names[i] + ".png")).string();
+      figures::SavePlots(path, "Öhman model, " + take_names[i], panels, 2);
+      result["figures"].push_back(path);
+    }
     for (const OhmanConsonant& c : fit.consonants) {
       report::PlotPanel panel;
       panel.x_label = "time from the consonant centre (ms)";
@@ -400,10 +465,22 @@ std::string OhmanText(const json& r) {
   s += "Öhman coarticulation model: " + std::to_string(r.at("summary").at("tokens").get<size_t>()) + " VCV tokens, " +
        std::to_string(r.at("summary").at("consonants").get<size_t>()) + " consonants, " + std::to_string(P) +
        " parameters (face model " + r.at("models").get<std::string>() + ")\n";
-  for (const json& t : r.at("takes"))
+  for (const json& t : r.at("takes")) {
     s += "  take " + t.at("take").get<std::string>() + ": " + std::to_string(t.at("tokens").get<int>()) + " tokens, " +
          std::to_string(t.at("solved_frames").get<int64_t>()) + "/" + std::to_string(t.at("frames").get<int64_t>()) +
-         " frames solved\n";
+         " frames solved";
+    if (t.contains("generation")) {
+      const json& g = t["generation"];
+      s += "; generated vs inverted r:";
+      for (const json& c : g.at("correlation")) s += " " + Fixed(c, 3);
+      if (!g.at("unknown_phones").empty()) {
+        s += " (left out:";
+        for (const json& u : g.at("unknown_phones")) s += " " + u.get<std::string>();
+        s += ")";
+      }
+    }
+    s += "\n";
+  }
   for (const json& t : r.at("skipped"))
     s += "  skipped " + t.at("take").get<std::string>() + ": " + t.at("reason").get<std::string>() + "\n";
   s += "Vowel references:\n";

@@ -12,7 +12,8 @@
 // object of the result; OhmanFitToJson / OhmanFitFromJson), so trajectories
 // can be generated later from it without the corpus. Writes nothing into the
 // corpus; --figures draws k_c(t) per consonant in its three contexts (the
-// MOTHER paper's Figure 8).
+// MOTHER paper's Figure 8) and, per take with tokens, the inverted
+// parameters, the vocalic carrier and the generated trajectories (Figure 9).
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -36,7 +37,10 @@ struct OhmanJobOptions {
 };
 
 // {"corpus", "models", "output", "figures": [...], "takes": [{"take", "frames",
-//  "solved_frames", "tokens"}], "skipped": [{"take", "reason"}],
+//  "solved_frames", "tokens", "generation": {"correlation": [P], "rms": [P],
+//  "unknown_phones": [...]} (trajectories regenerated from the fit with the
+//  take's phones, phones unknown to the fit left out, against the inverted
+//  ones: in-sample)}], "skipped": [{"take", "reason"}],
 //  "fit": OhmanFitToJson(...), "summary": {"tokens", "consonants",
 //  "identifiable", "parameters"}}
 nlohmann::json Ohman(const OhmanJobOptions& options, Progress& progress);
