@@ -186,6 +186,18 @@ TEST(OhmanSynthetic, NotIdentifiableWithoutSpreadAndErrors) {
   bad.min_w = 0;
   EXPECT_NE(bad.Check(), "");
   EXPECT_THROW(GenerateOhman(fit, {{0.0, 0.1, "x"}}, {0.05}), InvalidInput);
+  // Left out when asked: an unknown phone between [asa] and a pause changes nothing.
+  GenerateOptions lenient;
+  lenient.skip_unknown = true;
+  const std::vector<Label> known = {
+      {0.0, 0.3, ""}, {0.3, 0.42, "a"}, {0.42, 0.52, "s"}, {0.52, 0.64, "a"}, {0.64, 1.0, ""}};
+  std::vector<Label> with_unknown = known;
+  with_unknown.insert(with_unknown.begin() + 4, Label{0.64, 0.7, "x"});
+  with_unknown.back().start_s = 0.7;
+  const std::vector<double> times = {0.36, 0.47, 0.58, 0.8};
+  const Eigen::MatrixXd a = GenerateOhman(fit, known, times, lenient);
+  const Eigen::MatrixXd b = GenerateOhman(fit, with_unknown, times, lenient);
+  EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 TEST(OhmanSynthetic, NormalisePhonesFillsGapsWithPauses) {
