@@ -11,6 +11,7 @@
 #include "workbench/jobs/keys_job.h"
 #include "workbench/jobs/keys_suggest_job.h"
 #include "workbench/jobs/model_jobs.h"
+#include "workbench/jobs/ohman_job.h"
 #include "workbench/jobs/phasing_job.h"
 #include "workbench/jobs/sign_sequence_job.h"
 #include "workbench/jobs/transitions_job.h"
@@ -566,6 +567,48 @@ class PhasingCommand : public Command {
   bool json_ = false;
 };
 
+class OhmanCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("ohman",
+                              "Öhman coarticulation model from symmetric VCV takes inverted with a face model: "
+                              "per consonant w_c(x), c(x), k_c(t) and its stylisation (docs/coarticulation.md)");
+    sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
+    sub_->add_option("--models", options_.models, "Model file with a face model (csw fit face)")->required();
+    sub_->add_option("--takes", options_.takes,
+                     "Takes, comma-separated names or glob patterns (e.g. 'visemes_*': isolated vowels and VCV); "
+                     "default every take but fill versions");
+    sub_->add_option("--phones", options_.phones, "The phone tier (IPA)")->capture_default_str();
+    sub_->add_option("--vowels", options_.fit.vowels, "The symmetric vowel contexts")
+        ->delimiter(',')
+        ->capture_default_str();
+    sub_->add_option("--min-w", options_.fit.min_w, "Below this |w|, c(x) is not identifiable")->capture_default_str();
+    sub_->add_option("--min-vowel-spread", options_.fit.min_vowel_spread,
+                     "w(x) is fitted only where the vowel contexts spread over this fraction of x's range")
+        ->capture_default_str();
+    sub_->add_option("--min-effect", options_.fit.min_effect,
+                     "Per-parameter k(t) only where |w (c - v)| is at least this fraction of the parameter's range")
+        ->capture_default_str();
+    sub_->add_option("-o,--output", options_.output, "Write the fit (JSON, format csw-ohman)");
+    sub_->add_option("--figures", options_.figures, "Folder for the k(t) figures (PNG), one per consonant");
+    sub_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::Ohman(options_, progress);
+    if (json_) {
+      PrintJson(r);
+    } else {
+      std::cout << jobs::OhmanText(r);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::OhmanJobOptions options_;
+  bool json_ = false;
+};
+
 class TransitionsCommand : public Command {
  public:
   void Register(CLI::App& app) override {
@@ -719,6 +762,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<CueCommand>());
   c.push_back(std::make_unique<KeysCommand>());
   c.push_back(std::make_unique<PhasingCommand>());
+  c.push_back(std::make_unique<OhmanCommand>());
   c.push_back(std::make_unique<TransitionsCommand>());
   c.push_back(std::make_unique<SignSequenceCommand>());
   c.push_back(std::make_unique<PackCommand>());
