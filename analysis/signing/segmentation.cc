@@ -144,6 +144,7 @@ std::string RefineOptions::Check() const {
 std::string SegmentationOptions::Check(double rate_hz) const {
   if (!right && !left) return "no hand to refine";
   if (std::string why = speed.Check(rate_hz); !why.empty()) return why;
+  if (std::string why = rest.Check(); !why.empty()) return why;
   if (std::string why = refine.Check(); !why.empty()) return why;
   return "";
 }
@@ -166,14 +167,65 @@ Eigen::VectorXd WristSpeed(const MarkerArray& markers, int64_t marker, double ra
 std::vector<int64_t> LocalMinima(const Eigen::VectorXd& s) {
   std::vector<int64_t> out;
   const Eigen::Index n = s.size();
-  for (Eigen::Index i = 1; i + 1 < n; ++i) {
-    if (!std::isfinite(s[i]) || !std::isfinite(s[i - 1])) continue;
-    if (!(s[i - 1] > s[i])) continue;
-    // Walk over a flat bottom.
-    Eigen::Index j = i + 1;
+  Eigen::Index i = 0;
+  while (i < n) {
+    if (!std::isfinite(s[i])) {
+      ++i;
+      continue;
+    }
+    Eigen::Index j = i + 1;  // the run of equal values [i, j)
     while (j < n && std::isfinite(s[j]) && s[j] == s[i]) ++j;
-    if (j < n && std::isfinite(s[j]) && s[j] > s[i]) out.push_back(i);
+    const bool left_finite = i > 0 && std::isfinite(s[i - 1]), right_finite = j < n && std::isfinite(s[j]);
+    const bool left_higher = left_finite && s[i - 1] > s[i], right_higher = right_finite && s[j] > s[i];
+    const bool plateau = j - i >= 2;
+    // A bottom: higher on both sides; a plateau (a still hand, e.g. below
+    // rest_speed_mm_s) also where a take or a gap bounds it on one side.
+    if ((left_higher && right_higher) ||
+        (plateau && ((left_higher && !right_finite) || (!left_finite && right_higher)))) {
+      out.push_back(i);
+      if (plateau) out.push_back(j - 1);
+    }
+    i = j;
   }
+  return out;
+}
+
+std::string RestOptions::Check() const {
+  if (!(rest_speed_mm_s >= 0.0 && rest_speed_mm_s <= 1000.0)) return "the rest speed must be in [0, 1000] mm/s";
+  if (!(min_rest_s > 0.0 && min_rest_s <= 10.0)) return "the shortest rest must be in (0, 10] s";
+  return "";
+}
+
+std::vector<int64_t> SpeedMinima(const Eigen::VectorXd& speed, double rate_hz, const RestOptions& options) {
+  if (std::string why = options.Check(); !why.empty()) throw InvalidInput("speed minima: " + why);
+  std::vector<int64_t> minima = LocalMinima(speed);
+  if (options.rest_speed_mm_s <= 0.0) return minima;
+  const auto min_frames = static_cast<Eigen::Index>(std::ceil(options.min_rest_s * rate_hz - 1e-9));
+  std::vector<std::pair<int64_t, int64_t>> rests;  // [first, last]
+  const Eigen::Index n = speed.size();
+  for (Eigen::Index i = 0; i < n;) {
+    if (!(std::isfinite(speed[i]) && speed[i] < options.rest_speed_mm_s)) {
+      ++i;
+      continue;
+    }
+    Eigen::Index j = i;
+    while (j < n && std::isfinite(speed[j]) && speed[j] < options.rest_speed_mm_s) ++j;
+    if (j - i >= min_frames) rests.emplace_back(i, j - 1);
+    i = j;
+  }
+  std::vector<int64_t> out;
+  for (int64_t m : minima) {
+    bool inside = false;
+    for (const auto& [a, b] : rests) inside = inside || (m >= a && m <= b);
+    if (!inside) out.push_back(m);
+  }
+  for (const auto& [a, b] : rests) {
+    // A rest that starts or ends the valid samples has no arrival / departure there.
+    if (a > 0 && std::isfinite(speed[a - 1])) out.push_back(a);
+    if (b + 1 < n && std::isfinite(speed[b + 1])) out.push_back(b);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 
@@ -300,7 +352,7 @@ std::vector<HandSegmentation> RefineSegmentation(const Take& take, const LabelTi
     h.marker = side == 0 ? w.right : w.left;
     h.marker_name = side == 0 ? w.right_name : w.left_name;
     h.speed = WristSpeed(take.markers, h.marker, take.rate_hz, options.speed);
-    h.minima = LocalMinima(h.speed);
+    h.minima = SpeedMinima(h.speed, take.rate_hz, options.rest);
     h.boundaries = RefineBoundaries(tags, h.minima, take.rate_hz, options.refine);
     const std::string& given = side == 0 ? options.right_tier : options.left_tier;
     h.tier =

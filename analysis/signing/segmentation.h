@@ -10,8 +10,10 @@
 //   speed:   the wrist's positions are low-pass filtered (zero-phase
 //            Butterworth, analysis/cleaning/filter.h; gaps are respected) and
 //            the speed is |p[i+1] − p[i−1]| / (2 dt) (mm/s, NaN at run ends and in gaps);
-//   minima:  frames i with s[i−1] > s[i] <= s[i+1] (a flat bottom counts once,
-//            at its first frame), all three samples finite;
+//   minima:  frames i with s[i−1] > s[i] < s[i+1]; a flat bottom (equal
+//            values) gives its first and last frames, also when a gap or the
+//            take's edge bounds it on one side; optionally (RestOptions) a
+//            hand at rest gives its arrival and departure;
 //   refine:  every interior boundary of the manual interval tier (label i's
 //            end = label i+1's start), and the outer edges of labels that do not
 //            touch a neighbour, moves to the frame time of the nearest minimum
@@ -58,8 +60,22 @@ struct SpeedOptions {
 
 // The filtered speed (mm/s) of one marker, one value per frame.
 Eigen::VectorXd WristSpeed(const MarkerArray& markers, int64_t marker, double rate_hz, const SpeedOptions& options);
-// Local minima of a speed series, as above, in frame order.
+// Local minima of a speed series, as above, in frame order (NaN = missing).
 std::vector<int64_t> LocalMinima(const Eigen::VectorXd& speed);
+
+// Still hands. A hand at rest has no single speed minimum but a long stretch of
+// near-zero speed whose noise makes many; with rest_speed_mm_s > 0, every run
+// of at least min_rest_s where the speed stays below rest_speed_mm_s counts as
+// a rest: its first and last frames (arrival, departure) are its minima and
+// the minima inside it are dropped. Shorter runs (the bottom of a speed dip
+// between two movements) keep their local minima. 0 = off (the seed's method).
+struct RestOptions {
+  double rest_speed_mm_s = 0.0;
+  double min_rest_s = 0.15;
+  std::string Check() const;  // "" when valid
+};
+// LocalMinima with rests as above, in frame order.
+std::vector<int64_t> SpeedMinima(const Eigen::VectorXd& speed, double rate_hz, const RestOptions& options);
 
 struct RefineOptions {
   double threshold_s = 0.15;  // the seed's 15 frames at 100 Hz
@@ -102,6 +118,7 @@ struct HandSegmentation {
 
 struct SegmentationOptions {
   SpeedOptions speed;
+  RestOptions rest;
   RefineOptions refine;
   bool right = true, left = true;       // hands to refine
   std::string right_wrist, left_wrist;  // explicit marker names ("" = the rules of FindWrists)
