@@ -12,6 +12,7 @@
 #include "workbench/jobs/keys_suggest_job.h"
 #include "workbench/jobs/model_jobs.h"
 #include "workbench/jobs/phasing_job.h"
+#include "workbench/jobs/segment_job.h"
 
 namespace csw::cli {
 
@@ -347,6 +348,57 @@ class CleanCommand : public Command {
   bool json_ = false;
 };
 
+class SegmentCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("segment",
+                              "Refine the manual sign/transition boundaries of sign-language takes: each boundary "
+                              "moves to the nearest minimum of each hand's filtered wrist speed within a threshold, "
+                              "giving one tier per hand (docs/signing.md)");
+    sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
+    sub_->add_option("--takes", options_.takes,
+                     "Takes, comma-separated names or glob patterns ('signs0*'); \\ escapes * ? [ ] @ , "
+                     "(docs/cli.md); default every take but fill versions");
+    sub_->add_option("--tier", options_.tier, "The manual sign/transition interval tier")->required();
+    sub_->add_option("--hand", options_.hand, "Hands to refine: right, left or both")
+        ->check(CLI::IsMember({"right", "left", "both"}))
+        ->capture_default_str();
+    sub_->add_option("--cutoff-hz", options_.cutoff_hz,
+                     "-3 dB frequency of the zero-phase low-pass filter on the wrist positions (0 = none)")
+        ->capture_default_str();
+    sub_->add_option("--order", options_.order, "Butterworth order of one pass (2, 4, 6, 8)")->capture_default_str();
+    sub_->add_option("--threshold-s", options_.threshold_s,
+                     "A boundary moves only to a minimum at most this far (the seed: 0.15 s = 15 frames at 100 Hz)")
+        ->capture_default_str();
+    sub_->add_option("--rest-speed", options_.rest_speed_mm_s,
+                     "mm/s; > 0: a hand slower than this for --min-rest-s is at rest, and its arrival and departure "
+                     "are its minima (0 = the seed's plain minima)")
+        ->capture_default_str();
+    sub_->add_option("--min-rest-s", options_.min_rest_s, "Shortest rest for --rest-speed, in seconds")
+        ->capture_default_str();
+    sub_->add_option("--right-wrist", options_.right_wrist,
+                     "Right wrist marker (default: a name with 'wrist' or ending in 'hand' and a right side)");
+    sub_->add_option("--left-wrist", options_.left_wrist, "Left wrist marker (default: the naming rules)");
+    sub_->add_option("--right-tier", options_.right_tier, "Output tier of the right hand (default <tier>_right)");
+    sub_->add_option("--left-tier", options_.left_tier, "Output tier of the left hand (default <tier>_left)");
+    sub_->add_flag("--dry-run", options_.dry_run, "Report only: write no tier");
+    sub_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::Segment(options_, progress);
+    if (json_)
+      PrintJson(r);
+    else
+      std::cout << jobs::SegmentText(r);
+    return 0;
+  }
+
+ private:
+  jobs::SegmentOptions options_;
+  bool json_ = false;
+};
+
 class CueCommand : public Command {
  public:
   void Register(CLI::App& app) override {
@@ -618,6 +670,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<FitCommand>());
   c.push_back(std::make_unique<InvertCommand>());
   c.push_back(std::make_unique<CleanCommand>());
+  c.push_back(std::make_unique<SegmentCommand>());
   c.push_back(std::make_unique<CueCommand>());
   c.push_back(std::make_unique<KeysCommand>());
   c.push_back(std::make_unique<PhasingCommand>());
