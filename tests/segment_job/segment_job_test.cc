@@ -7,11 +7,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "datasets/virtual_signer.h"
 #include "io/corpus/corpus.h"
 #include "tests/testing/testing.h"
 #include "workbench/jobs/job_util.h"
+#include "workbench/jobs/simulate_job.h"
 
 namespace csw::jobs {
 namespace {
@@ -169,6 +171,36 @@ TEST(SegmentJob, OtherNamesAndErrors) {
   o.tier = "manual";
   o.hand = "up";
   EXPECT_THROW(Segment(o, progress), UsageError);
+}
+
+// csw simulate signs writes a corpus with the truth tiers and a jittered
+// "manual" tier, and one truth file per take, that csw segment reads.
+TEST(SegmentJob, SimulatedSignsCorpus) {
+  testing::TempDir dir;
+  SimulateJobOptions s;
+  s.corpus = "signs";
+  s.output = (dir / "out").string();
+  s.count = 3;
+  s.rate_hz = 100;
+  s.noise_mm = 0.5;
+  ASSERT_EQ(s.Check(), "");
+  Progress progress;
+  const std::vector<std::string> names = Simulate(s, progress);
+  EXPECT_EQ(names, (std::vector<std::string>{"signs000", "signs001", "signs002"}));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "signs001.truth.json"));
+  const Corpus corpus = Corpus::Open((dir / "out" / "signs.h5").string());
+  const Take t = corpus.LoadTake("signs001");
+  const SignerTake expected = VirtualSigner(ToSignerOptions(s)).SimulateTake(1);
+  EXPECT_EQ(t.markers.data(), expected.take.markers.data());
+  std::vector<std::string> tiers;
+  for (const LabelTier& tier : t.tiers) tiers.push_back(tier.name);
+  EXPECT_EQ(tiers, (std::vector<std::string>{"signs", "right_hand", "left_hand", "sign_types", "manual"}));
+  SegmentOptions o = Valid();
+  o.corpus = (dir / "out" / "signs.h5").string();
+  const json r = Segment(o, progress);
+  EXPECT_EQ(r["takes"].size(), 3u);
+  s.law = "linear";
+  EXPECT_EQ(s.Check(), "simulate: --law must be surface or simple, not 'linear'");
 }
 
 }  // namespace

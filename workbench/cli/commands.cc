@@ -158,9 +158,10 @@ class SimulateCommand : public Command {
                               "The virtual cuer: write realistic cued-speech captures (C3D, WAV, TextGrid) with "
                               "ground truth");
     sub_->add_option("corpus", options_.corpus,
-                     "shapes, visemes, sentences, or demo (all three; every option below applies to it)")
+                     "shapes, visemes, sentences, or demo (all three; every option below applies to it); signs: "
+                     "the virtual signer (docs/signing.md), a corpus signs.h5 and <take>.truth.json")
         ->required()
-        ->check(CLI::IsMember({"shapes", "visemes", "sentences", "demo"}));
+        ->check(CLI::IsMember({"shapes", "visemes", "sentences", "demo", "signs"}));
     sub_->add_option("-o,--output", options_.output, "Output folder")->required();
     sub_->add_option("--seed", options_.seed, "Random seed: the same seed gives identical files")
         ->capture_default_str();
@@ -182,8 +183,20 @@ class SimulateCommand : public Command {
         ->capture_default_str();
     sub_->add_option("--phasing", options_.phasing_file,
                      "Phasing-model JSON (docs/virtual-cuer.md): gesture start/target laws instead of the defaults");
+    sub_->add_option("--law", options_.law,
+                     "signs: transition duration law, surface (the seed's plane) or simple (its eq. 3)")
+        ->check(CLI::IsMember({"surface", "simple"}))
+        ->capture_default_str();
+    sub_->add_option("--manual-jitter", options_.manual_jitter_s,
+                     "signs: also write a tier 'manual', the 'signs' tier with each boundary moved by up to this "
+                     "many seconds (0 = none)")
+        ->capture_default_str();
   }
   int Run(Progress& progress) override {
+    if (options_.corpus == "signs") {  // the signer's defaults: 100 Hz (the seed's), 0.5 mm noise
+      if (sub_->get_option("--rate")->count() == 0) options_.rate_hz = 100.0;
+      if (sub_->get_option("--noise")->count() == 0) options_.noise_mm = 0.5;
+    }
     if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
     std::vector<std::string> takes = jobs::Simulate(options_, progress);
     std::cout << "wrote " << takes.size() << " take(s) to " << options_.output << "\n";
@@ -382,6 +395,11 @@ class SegmentCommand : public Command {
     sub_->add_option("--right-tier", options_.right_tier, "Output tier of the right hand (default <tier>_right)");
     sub_->add_option("--left-tier", options_.left_tier, "Output tier of the left hand (default <tier>_left)");
     sub_->add_flag("--dry-run", options_.dry_run, "Report only: write no tier");
+    sub_->add_option("--figures", options_.figures,
+                     "Folder for one figure per take: wrist speeds with the manual and refined tiers (PNG)");
+    sub_->add_option("--figure-tiers", options_.figure_tiers,
+                     "More tiers to draw in the figures (comma-separated), e.g. a simulation's right_hand,left_hand")
+        ->delimiter(',');
     sub_->add_flag("--json", json_, "Print the report as JSON");
   }
   int Run(Progress& progress) override {

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <sstream>
 
 #include "analysis/signing/segmentation.h"
 #include "core/error.h"
 #include "io/corpus/corpus.h"
+#include "workbench/jobs/figures.h"
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/take_data.h"
 #include "workbench/jobs/take_selection.h"
@@ -19,7 +21,11 @@ using nlohmann::json;
 
 namespace {
 
-double Round(double v, double step) { return std::isfinite(v) ? std::round(v / step) * step : v; }
+// v rounded to `digits` decimals (as a JSON number prints without noise digits).
+double Round(double v, int digits) {
+  const double scale = std::pow(10.0, digits);
+  return std::isfinite(v) ? std::round(v * scale) / scale : v;
+}
 
 signing::SegmentationOptions ToAnalysis(const SegmentOptions& o) {
   signing::SegmentationOptions s;
@@ -59,8 +65,13 @@ std::string SegmentOptions::Check() const {
 json Segment(const SegmentOptions& options, Progress& progress) {
   if (const std::string why = options.Check(); !why.empty()) throw UsageError(why);
   const signing::SegmentationOptions seg = ToAnalysis(options);
+  if (!options.figures.empty()) {
+    figures::Require();
+    std::filesystem::create_directories(options.figures);
+  }
   const Corpus corpus = Corpus::Open(options.corpus);
   const std::vector<TakeRange> ranges = SelectCorpusTakes(corpus, options.takes);
+  json figure_files = json::array();
   json result = {{"corpus", options.corpus},
                  {"tier", options.tier},
                  {"dry_run", options.dry_run},
@@ -104,7 +115,7 @@ json Segment(const SegmentOptions& options, Progress& progress) {
       double sum = 0, max = 0;
       int kept = 0;
       for (const signing::BoundaryRefinement& b : h.boundaries) {
-        json m = {{"manual_s", Round(b.manual_s, 1e-4)}, {"refined_s", Round(b.refined_s, 1e-4)}, {"moved", b.moved}};
+        json m = {{"manual_s", Round(b.manual_s, 4)}, {"refined_s", Round(b.refined_s, 4)}, {"moved", b.moved}};
         if (!b.moved) {
           m["why"] = b.why;
           ++kept;
@@ -123,16 +134,43 @@ json Segment(const SegmentOptions& options, Progress& progress) {
                              {"kept", kept},
                              {"minima", h.minima.size()},
                              {"shift_ms",
-                              {{"mean", moved ? json(Round(1000 * sum / moved, 0.1)) : json(nullptr)},
-                               {"max", moved ? json(Round(1000 * max, 0.1)) : json(nullptr)}}},
+                              {{"mean", moved ? json(Round(1000 * sum / moved, 1)) : json(nullptr)},
+                               {"max", moved ? json(Round(1000 * max, 1)) : json(nullptr)}}},
                              {"moves", moves}});
       all_boundaries += static_cast<int64_t>(h.boundaries.size());
       all_moved += moved;
       tiers.push_back(h.tier);
     }
+    if (!options.figures.empty()) {
+      // Speeds as fractions of the take's largest (the lanes are drawn in [0, 1]).
+      double top = 0;
+      for (const auto& h : hands)
+        for (double v : h.speed)
+          if (std::isfinite(v)) top = std::max(top, v);
+      report::PosteriorLane lane;
+      lane.name = "wrist speed / " + std::to_string(static_cast<int>(std::round(top))) + " mm/s";
+      lane.posteriors.resize(take.frames(), static_cast<Eigen::Index>(hands.size()));
+      for (size_t k = 0; k < hands.size(); ++k) {
+        lane.classes.push_back(hands[k].hand == 'R' ? "right" : "left");
+        lane.posteriors.col(static_cast<Eigen::Index>(k)) = hands[k].speed / (top > 0 ? top : 1.0);
+      }
+      std::vector<LabelTier> drawn = {*FindTier(tiers, options.tier)};
+      for (const auto& h : hands) drawn.push_back(h.tier);
+      for (const std::string& name : options.figure_tiers) {
+        const LabelTier* t = FindTier(tiers, name);
+        if (t == nullptr)
+          throw InvalidInput(where + ": no tier '" + name + "' to draw (tiers: " + TierNames(tiers) + ")");
+        drawn.push_back(*t);
+      }
+      const std::string path = (std::filesystem::path(options.figures) / ("segment_" + range.take + ".png")).string();
+      figures::SaveGesturalScore(path, "Segmentation refinement: " + range.take, {}, 1.0, 0.0, {lane}, take.rate_hz,
+                                 drawn, 0.0, take.duration_s());
+      figure_files.push_back(path);
+    }
     result["takes"].push_back(tj);
     writes.emplace_back(range.take, std::move(tiers));
   }
+  result["figures"] = figure_files;
   result["boundaries"] = all_boundaries;
   result["moved"] = all_moved;
   result["tiers_written"] = !options.dry_run && !writes.empty();

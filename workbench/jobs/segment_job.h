@@ -31,13 +31,19 @@ struct SegmentOptions {
   std::string right_wrist, left_wrist;  // explicit wrist markers ("" = the naming rules)
   std::string right_tier, left_tier;    // output tier names ("" = <tier>_right / <tier>_left)
   bool dry_run = false;                 // report only, write no tier
-  std::string Check() const;            // "" when valid, else the reason (a usage error)
+  // Folder for one figure per take (segment_<take>.png, the figures module):
+  // the wrist speeds with the manual tier, the refined tiers and the tiers
+  // named in figure_tiers (e.g. a simulation's truth).
+  std::string figures;
+  std::vector<std::string> figure_tiers;
+  std::string Check() const;  // "" when valid, else the reason (a usage error)
 };
 
 // {"corpus", "tier", "dry_run", "options": {"cutoff_hz", "order", "threshold_s", "rest_speed_mm_s",
 //   "min_rest_s"}, "takes": [{"take", "rate_hz", "hands": [{"hand": "right"|"left", "wrist", "rule",
 //   "tier", "boundaries", "moved", "kept", "shift_ms": {"mean", "max"}, "minima",
-//   "moves": [{"manual_s", "refined_s", "moved", "why"}]}]}], "boundaries", "moved", "tiers_written"}
+//   "moves": [{"manual_s", "refined_s", "moved", "why"}]}]}], "boundaries", "moved", "tiers_written",
+//   "figures": [paths]}
 nlohmann::json Segment(const SegmentOptions& options, Progress& progress);
 // The default text: one line per take and hand, then the kept boundaries and a total.
 std::string SegmentText(const nlohmann::json& result);
