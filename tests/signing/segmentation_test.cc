@@ -117,15 +117,22 @@ struct Evaluation {
   Score manual;          // the tags before refinement (stroke tags)
 };
 
-// Refines the jittered `signs` tier of `takes` takes and scores every hand's
-// boundary against its truth.
-Evaluation Evaluate(const SignerOptions& so, int takes, const SegmentationOptions& seg) {
+std::vector<SignerTake> Simulate(const SignerOptions& so, int takes) {
   const VirtualSigner signer(so);
+  std::vector<SignerTake> out;
+  for (int i = 0; i < takes; ++i) out.push_back(signer.SimulateTake(i));
+  return out;
+}
+
+// Refines the jittered `signs` tier of each take and scores every hand's
+// boundary against its truth.
+Evaluation Evaluate(const std::vector<SignerTake>& takes, const SignerOptions& so, const SegmentationOptions& seg) {
   Evaluation e;
   const double frame = 1.0 / so.rate_hz;
-  for (int i = 0; i < takes; ++i) {
-    const SignerTake t = signer.SimulateTake(i);
-    const LabelTier manual = JitterBoundaries(t.take.tiers[0], "manual", 0.1, so.rate_hz, 1000 + i);
+  for (size_t i = 0; i < takes.size(); ++i) {
+    const SignerTake& t = takes[i];
+    const LabelTier manual =
+        JitterBoundaries(t.take.tiers[0], "manual", 0.1, so.rate_hz, 1000 + static_cast<uint64_t>(i));
     const auto hands = RefineSegmentation(t.take, manual, seg);
     EXPECT_EQ(hands.size(), 2u);
     EXPECT_EQ(hands[0].boundaries.size(), t.boundaries.size());
@@ -161,8 +168,9 @@ void Print(const char* what, const Evaluation& e) {
 // Issue 14, done-when: >= 90 % of the noisy tags within 2 frames of the truth,
 // with the seed's method (6 Hz zero-phase filter, 0.15 s threshold).
 TEST(Segmentation, RefinementMovesNoisyTagsToTheTruth) {
-  const int takes = testing::kSanitized ? 6 : 60;
-  const Evaluation e = Evaluate(SignerOptions{}, takes, SegmentationOptions{});
+  const int takes = testing::kSanitized ? 15 : 60;
+  const std::vector<SignerTake> simulated = Simulate(SignerOptions{}, takes);
+  const Evaluation e = Evaluate(simulated, SignerOptions{}, SegmentationOptions{});
   Print("seed's method", e);
   EXPECT_GT(e.strokes.total, takes * 8);
   EXPECT_GE(e.strokes.Fraction(), 0.90);
@@ -172,7 +180,7 @@ TEST(Segmentation, RefinementMovesNoisyTagsToTheTruth) {
   // edges next to rest are found.
   SegmentationOptions rest;
   rest.rest.rest_speed_mm_s = 30.0;
-  const Evaluation r = Evaluate(SignerOptions{}, takes, rest);
+  const Evaluation r = Evaluate(simulated, SignerOptions{}, rest);
   Print("with rests at 30 mm/s", r);
   EXPECT_GE(r.strokes.Fraction(), 0.95);
   EXPECT_GE(r.rest_edges.Fraction(), 0.95);
@@ -188,8 +196,8 @@ TEST(Segmentation, OtherSkeletonNamesAndProportions) {
   o.rate_hz = 120.0;
   o.noise_mm = 0.8;
   o.seed = 11;
-  const int takes = testing::kSanitized ? 4 : 25;
-  const Evaluation e = Evaluate(o, takes, SegmentationOptions{});
+  const int takes = testing::kSanitized ? 12 : 25;
+  const Evaluation e = Evaluate(Simulate(o, takes), o, SegmentationOptions{});
   Print("mixamo skeleton, 120 Hz", e);
   EXPECT_GE(e.strokes.Fraction(), 0.90);
   const SignerTake t = VirtualSigner(o).SimulateTake(0);
