@@ -709,7 +709,10 @@ std::string SignerTruthToJson(const SignerTake& t, const SignerOptions& o) {
   j << "{\n  \"take\": \"" << t.take.name << "\",\n  \"rate_hz\": " << num(o.rate_hz, 3) << ",\n  \"law\": \""
     << DurationLawName(o.law) << "\",\n  \"theta\": [" << num(o.theta[0], 6) << ", " << num(o.theta[1], 6) << ", "
     << num(o.theta[2], 6) << "],\n  \"simple_alpha\": " << num(o.simple_alpha, 4)
-    << ",\n  \"distance_unit_mm\": " << num(o.distance_unit_mm, 3) << ",\n  \"signs\": [";
+    << ",\n  \"distance_unit_mm\": " << num(o.distance_unit_mm, 3)
+    << ",\n  \"duration_noise_sd_s\": " << num(o.duration_noise_sd_s, 4)
+    << ",\n  \"hand_offset_max_s\": " << num(o.hand_offset_max_s, 4) << ",\n  \"noise_mm\": " << num(o.noise_mm, 3)
+    << ",\n  \"seed\": " << o.seed << ",\n  \"signs\": [";
   for (size_t i = 0; i < t.signs.size(); ++i) {
     const SignOccurrence& s = t.signs[i];
     j << (i ? "," : "") << "\n    {\"gloss\": \"" << s.gloss << "\", \"type\": \"" << SignTypeName(s.type)

@@ -149,7 +149,11 @@ struct TransitionTruth {
   int from_sign = -1, to_sign = -1;                  // indices into the take's signs, -1 = rest
   double start_s = 0.0, end_s = 0.0;                 // nominal (the `signs` tier); end - start = duration_s
   double right_offset_s = 0.0, left_offset_s = 0.0;  // each hand's movement is [start, end] + its offset
-  double geodesic = 0.0;    // G (rad) between the bounding postures (stroke end / rest, stroke start / rest)
+  // G and E between the bounding postures (the previous stroke's last posture or
+  // rest, the next stroke's first posture or rest), whole skeleton: both hands'
+  // target postures, whatever their offsets. With hand_offset_max_s = 0 they are
+  // the skeleton's poses at the frames start_s and end_s.
+  double geodesic = 0.0;    // G (rad)
   double euclidean = 0.0;   // E in units of distance_unit_mm
   double law_s = 0.0;       // the law's value (with its noise, before clamping and rounding)
   double duration_s = 0.0;  // simulated: clamped, rounded to whole frames

@@ -191,6 +191,15 @@ class SimulateCommand : public Command {
                      "signs: also write a tier 'manual', the 'signs' tier with each boundary moved by up to this "
                      "many seconds (0 = none)")
         ->capture_default_str();
+    sub_->add_option("--hand-offset", options_.hand_offset_s,
+                     "signs: each hand's movements are shifted by up to this many seconds (0 = synchronous hands)")
+        ->capture_default_str();
+    sub_->add_option("--duration-noise", options_.duration_noise_s,
+                     "signs: sd (s) of Gaussian noise added to the duration law (0 = the law exactly)")
+        ->capture_default_str();
+    sub_->add_option("--naming", options_.naming, "signs: joint names, csw or mixamo")
+        ->check(CLI::IsMember({"csw", "mixamo"}))
+        ->capture_default_str();
   }
   int Run(Progress& progress) override {
     if (options_.corpus == "signs") {  // the signer's defaults: 100 Hz (the seed's), 0.5 mm noise

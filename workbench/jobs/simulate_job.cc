@@ -76,6 +76,9 @@ SignerOptions ToSignerOptions(const SimulateJobOptions& options) {
   o.rate_hz = options.rate_hz;
   o.noise_mm = options.noise_mm;
   ParseDurationLaw(options.law, &o.law);
+  o.hand_offset_max_s = options.hand_offset_s;
+  o.duration_noise_sd_s = options.duration_noise_s;
+  o.naming = options.naming;
   return o;
 }
 

@@ -42,7 +42,10 @@ struct SimulateJobOptions {
   // boundary moved by up to manual_jitter_s (0 = no such tier).
   std::string law = "surface";
   double manual_jitter_s = 0.1;
-  std::string Check() const;  // "" when valid, else the reason (a usage error)
+  double hand_offset_s = 0.03;    // each hand's movements shifted by up to this (0 = synchronous hands)
+  double duration_noise_s = 0.0;  // Gaussian noise added to the law (0 = the law exactly)
+  std::string naming = "csw";     // joint names: csw or mixamo
+  std::string Check() const;      // "" when valid, else the reason (a usage error)
 };
 
 // The datasets options for `options` (sentences_file and phasing_file not read yet).
