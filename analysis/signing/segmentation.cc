@@ -80,7 +80,8 @@ char NameSide(const std::string& name) {
   return 0;
 }
 
-WristJoints FindWrists(const std::vector<std::string>& names, const std::string& right, const std::string& left) {
+WristJoints FindWrists(const std::vector<std::string>& names, const std::string& right, const std::string& left,
+                       bool find_right, bool find_left) {
   WristJoints w;
   auto list = [&]() {
     std::string s;
@@ -89,6 +90,7 @@ WristJoints FindWrists(const std::vector<std::string>& names, const std::string&
     return s.empty() ? std::string("none") : s;
   };
   for (int side = 0; side < 2; ++side) {
+    if (side == 0 ? !find_right : !find_left) continue;
     const char want = side == 0 ? 'R' : 'L';
     const std::string& given = side == 0 ? right : left;
     int64_t& index = side == 0 ? w.right : w.left;
@@ -322,26 +324,12 @@ std::vector<HandSegmentation> RefineSegmentation(const Take& take, const LabelTi
   if (std::string why = options.Check(take.rate_hz); !why.empty()) throw InvalidInput(where + ": " + why);
   if (manual.kind != LabelTier::Kind::kInterval)
     throw InvalidInput(where + ": tier '" + manual.name + "' is a point tier: segmentation needs an interval tier");
-  // Find only the wrists asked for (a one-armed skeleton still refines its hand).
+  // Only the wrists asked for (a one-armed skeleton still refines its hand).
   WristJoints w;
-  {
-    std::vector<std::string> names = take.marker_names;
-    if (options.right && options.left) {
-      try {
-        w = FindWrists(names, options.right_wrist, options.left_wrist);
-      } catch (const InvalidInput& e) {
-        throw InvalidInput(where + ": " + e.what());
-      }
-    } else {
-      // A placeholder for the side not asked for, so FindWrists checks only the other.
-      const std::string r = options.right ? options.right_wrist : names.empty() ? "" : names[0];
-      const std::string l = options.left ? options.left_wrist : names.empty() ? "" : names[0];
-      try {
-        w = FindWrists(names, r, l);
-      } catch (const InvalidInput& e) {
-        throw InvalidInput(where + ": " + e.what());
-      }
-    }
+  try {
+    w = FindWrists(take.marker_names, options.right_wrist, options.left_wrist, options.right, options.left);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(where + ": " + e.what());
   }
   const std::vector<double> tags = TierBoundaries(manual);
   std::vector<HandSegmentation> out;

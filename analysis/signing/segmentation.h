@@ -45,8 +45,9 @@ struct WristJoints {
   std::string right_name, left_name;
   std::string right_rule, left_rule;  // "given", "wrist" or "hand"
 };
+// Only the sides asked for are looked for (the other stays -1).
 WristJoints FindWrists(const std::vector<std::string>& names, const std::string& right = "",
-                       const std::string& left = "");
+                       const std::string& left = "", bool find_right = true, bool find_left = true);
 // The side a name belongs to by rule 1: 'R', 'L' or 0.
 char NameSide(const std::string& name);
 

@@ -44,6 +44,10 @@ TEST(Segmentation, WristRulesOnOtherLabsNames) {
     EXPECT_NE(std::string(e.what()).find("LeftElbow"), std::string::npos);
   }
   EXPECT_THROW(FindWrists({"RightWrist", "LeftWrist"}, "Nope"), InvalidInput);
+  // One side only: a one-armed skeleton.
+  const WristJoints one = FindWrists({"Hips", "RightWrist"}, "", "", true, false);
+  EXPECT_EQ(one.right, 1);
+  EXPECT_EQ(one.left, -1);
 }
 
 TEST(Segmentation, LocalMinimaAndRests) {
