@@ -815,7 +815,7 @@ TEST(CliModels, FramesCsvAndWorstFramesFindKnownBadFrames) {
   EXPECT_NE(bad.err.find("--worst-frames must be >= 0"), std::string::npos) << bad.err;
 }
 
-// csw ohman end to end on the viseme corpus of csw simulate (espeak-ng phones):
+// csw coartic fit end to end on the viseme corpus of csw simulate (espeak-ng phones):
 // a face model fitted with csw fit, then the Öhman fit written as JSON with
 // one token per (context, consonant) read by espeak-ng as V C V; a bad option
 // is a usage error (exit 1) naming it.
@@ -830,7 +830,7 @@ TEST(OhmanCli, FitsTheSimulatedVisemeCorpus) {
       Csw("-q import" + files + " --markerset " + Q(sim / "markerset.json") + " -o " + Q(corpus), dir.path()).code, 0);
   ASSERT_EQ(Csw("-q fit face " + Q(corpus) + " -o " + Q(models), dir.path()).code, 0);
   const json r = RunJson(
-      "-q ohman " + Q(corpus) + " --models " + Q(models) + " --takes 'visemes_vcv_*' -o " + Q(dir / "ohman.json"),
+      "-q coartic fit " + Q(corpus) + " --models " + Q(models) + " --takes 'visemes_vcv_*' -o " + Q(dir / "ohman.json"),
       dir.path());
   ASSERT_TRUE(r.is_object());
   // 17 consonants in 3 contexts; espeak-ng does not read every item as a lone
@@ -841,7 +841,7 @@ TEST(OhmanCli, FitsTheSimulatedVisemeCorpus) {
   const json file = json::parse(std::ifstream(dir / "ohman.json"));
   EXPECT_EQ(file["format"], "csw-ohman");
   EXPECT_EQ(file, r["fit"]);
-  const RunResult bad = Csw("ohman " + Q(corpus) + " --models " + Q(models) + " --min-w 2", dir.path());
+  const RunResult bad = Csw("coartic fit " + Q(corpus) + " --models " + Q(models) + " --min-w 2", dir.path());
   EXPECT_EQ(bad.code, 1) << bad.err;
   EXPECT_NE(bad.err.find("min_w must be in (0, 1)"), std::string::npos) << bad.err;
 }

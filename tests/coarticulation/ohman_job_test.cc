@@ -1,4 +1,4 @@
-// csw ohman (workbench/jobs/ohman_job.h): option checks, the text report of a
+// csw coartic fit (workbench/jobs/ohman_job.h): option checks, the text report of a
 // hand-written result, the fit file's parsing (round trip and errors), and
 // the job end to end on virtual-cuer VCV takes in a test corpus with a face
 // model fitted by csw fit.

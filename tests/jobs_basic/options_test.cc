@@ -117,7 +117,7 @@ TEST(SimulateJobOptionsCheck, RejectsEachBadRequestWithItsReason) {
   EXPECT_EQ(o.Check(), "simulate: no output folder (-o)");
   o.output = (dir / "out").string();
   o.corpus = "poems";
-  EXPECT_EQ(o.Check(), "simulate: unknown corpus \"poems\" (shapes, visemes, sentences or demo)");
+  EXPECT_EQ(o.Check(), "simulate: unknown corpus \"poems\" (shapes, visemes, sentences, signs or demo)");
   o.corpus = "sentences";
   o.count = -1;
   EXPECT_EQ(o.Check(), "simulate: --count must be >= 0");

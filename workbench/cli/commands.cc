@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "workbench/jobs/clean_job.h"
+#include "workbench/jobs/coartic_generate_job.h"
 #include "workbench/jobs/cue_job.h"
 #include "workbench/jobs/jobs.h"
 #include "workbench/jobs/keys_job.h"
@@ -13,6 +14,7 @@
 #include "workbench/jobs/model_jobs.h"
 #include "workbench/jobs/ohman_job.h"
 #include "workbench/jobs/phasing_job.h"
+#include "workbench/jobs/segment_job.h"
 #include "workbench/jobs/sign_sequence_job.h"
 #include "workbench/jobs/transitions_job.h"
 
@@ -165,9 +167,10 @@ class SimulateCommand : public Command {
                               "The virtual cuer: write realistic cued-speech captures (C3D, WAV, TextGrid) with "
                               "ground truth");
     sub_->add_option("corpus", options_.corpus,
-                     "shapes, visemes, sentences, or demo (all three; every option below applies to it)")
+                     "shapes, visemes, sentences, or demo (all three; every option below applies to it); signs: "
+                     "the virtual signer (docs/signing.md), a corpus signs.h5 and <take>.truth.json")
         ->required()
-        ->check(CLI::IsMember({"shapes", "visemes", "sentences", "demo"}));
+        ->check(CLI::IsMember({"shapes", "visemes", "sentences", "demo", "signs"}));
     sub_->add_option("-o,--output", options_.output, "Output folder")->required();
     sub_->add_option("--seed", options_.seed, "Random seed: the same seed gives identical files")
         ->capture_default_str();
@@ -189,8 +192,29 @@ class SimulateCommand : public Command {
         ->capture_default_str();
     sub_->add_option("--phasing", options_.phasing_file,
                      "Phasing-model JSON (docs/virtual-cuer.md): gesture start/target laws instead of the defaults");
+    sub_->add_option("--law", options_.law,
+                     "signs: transition duration law, surface (the seed's plane) or simple (its eq. 3)")
+        ->check(CLI::IsMember({"surface", "simple"}))
+        ->capture_default_str();
+    sub_->add_option("--manual-jitter", options_.manual_jitter_s,
+                     "signs: also write a tier 'manual', the 'signs' tier with each boundary moved by up to this "
+                     "many seconds (0 = none)")
+        ->capture_default_str();
+    sub_->add_option("--hand-offset", options_.hand_offset_s,
+                     "signs: each hand's movements are shifted by up to this many seconds (0 = synchronous hands)")
+        ->capture_default_str();
+    sub_->add_option("--duration-noise", options_.duration_noise_s,
+                     "signs: sd (s) of Gaussian noise added to the duration law (0 = the law exactly)")
+        ->capture_default_str();
+    sub_->add_option("--naming", options_.naming, "signs: joint names, csw or mixamo")
+        ->check(CLI::IsMember({"csw", "mixamo"}))
+        ->capture_default_str();
   }
   int Run(Progress& progress) override {
+    if (options_.corpus == "signs") {  // the signer's defaults: 100 Hz (the seed's), 0.5 mm noise
+      if (sub_->get_option("--rate")->count() == 0) options_.rate_hz = 100.0;
+      if (sub_->get_option("--noise")->count() == 0) options_.noise_mm = 0.5;
+    }
     if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
     std::vector<std::string> takes = jobs::Simulate(options_, progress);
     std::cout << "wrote " << takes.size() << " take(s) to " << options_.output << "\n";
@@ -352,6 +376,62 @@ class CleanCommand : public Command {
 
  private:
   jobs::CleanOptions options_;
+  bool json_ = false;
+};
+
+class SegmentCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("segment",
+                              "Refine the manual sign/transition boundaries of sign-language takes: each boundary "
+                              "moves to the nearest minimum of each hand's filtered wrist speed within a threshold, "
+                              "giving one tier per hand (docs/signing.md)");
+    sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
+    sub_->add_option("--takes", options_.takes,
+                     "Takes, comma-separated names or glob patterns ('signs0*'); \\ escapes * ? [ ] @ , "
+                     "(docs/cli.md); default every take but fill versions");
+    sub_->add_option("--tier", options_.tier, "The manual sign/transition interval tier")->required();
+    sub_->add_option("--hand", options_.hand, "Hands to refine: right, left or both")
+        ->check(CLI::IsMember({"right", "left", "both"}))
+        ->capture_default_str();
+    sub_->add_option("--cutoff-hz", options_.cutoff_hz,
+                     "-3 dB frequency of the zero-phase low-pass filter on the wrist positions (0 = none)")
+        ->capture_default_str();
+    sub_->add_option("--order", options_.order, "Butterworth order of one pass (2, 4, 6, 8)")->capture_default_str();
+    sub_->add_option("--threshold-s", options_.threshold_s,
+                     "A boundary moves only to a minimum at most this far (the seed: 0.15 s = 15 frames at 100 Hz)")
+        ->capture_default_str();
+    sub_->add_option("--rest-speed", options_.rest_speed_mm_s,
+                     "mm/s; > 0: a hand slower than this for --min-rest-s is at rest, and its arrival and departure "
+                     "are its minima (0 = the seed's plain minima)")
+        ->capture_default_str();
+    sub_->add_option("--min-rest-s", options_.min_rest_s, "Shortest rest for --rest-speed, in seconds")
+        ->capture_default_str();
+    sub_->add_option("--right-wrist", options_.right_wrist,
+                     "Right wrist marker (default: a name with 'wrist' or ending in 'hand' and a right side)");
+    sub_->add_option("--left-wrist", options_.left_wrist, "Left wrist marker (default: the naming rules)");
+    sub_->add_option("--right-tier", options_.right_tier, "Output tier of the right hand (default <tier>_right)");
+    sub_->add_option("--left-tier", options_.left_tier, "Output tier of the left hand (default <tier>_left)");
+    sub_->add_flag("--dry-run", options_.dry_run, "Report only: write no tier");
+    sub_->add_option("--figures", options_.figures,
+                     "Folder for one figure per take: wrist speeds with the manual and refined tiers (PNG)");
+    sub_->add_option("--figure-tiers", options_.figure_tiers,
+                     "More tiers to draw in the figures (comma-separated), e.g. a simulation's right_hand,left_hand")
+        ->delimiter(',');
+    sub_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::Segment(options_, progress);
+    if (json_)
+      PrintJson(r);
+    else
+      std::cout << jobs::SegmentText(r);
+    return 0;
+  }
+
+ private:
+  jobs::SegmentOptions options_;
   bool json_ = false;
 };
 
@@ -567,33 +647,67 @@ class PhasingCommand : public Command {
   bool json_ = false;
 };
 
-class OhmanCommand : public Command {
+class CoarticCommand : public Command {
  public:
   void Register(CLI::App& app) override {
-    sub_ = app.add_subcommand("ohman",
-                              "Öhman coarticulation model from symmetric VCV takes inverted with a face model: "
-                              "per consonant w_c(x), c(x), k_c(t) and its stylisation (docs/coarticulation.md)");
-    sub_->add_option("corpus", options_.corpus, "Corpus file")->required();
-    sub_->add_option("--models", options_.models, "Model file with a face model (csw fit face)")->required();
-    sub_->add_option("--takes", options_.takes,
-                     "Takes, comma-separated names or glob patterns (e.g. 'visemes_*': isolated vowels and VCV); "
-                     "default every take but fill versions");
-    sub_->add_option("--phones", options_.phones, "The phone tier (IPA)")->capture_default_str();
-    sub_->add_option("--vowels", options_.fit.vowels, "The symmetric vowel contexts")
+    sub_ = app.add_subcommand("coartic",
+                              "Öhman's coarticulation model (docs/coarticulation.md): fit it on symmetric VCV takes, "
+                              "generate parameter trajectories for a phone string");
+    sub_->require_subcommand(1);
+    fit_ = sub_->add_subcommand("fit",
+                                "Fit on symmetric VCV takes inverted with a face model: per consonant w_c(x), c(x), "
+                                "k_c(t) and its stylisation");
+    CLI::App* f = fit_;
+    f->add_option("corpus", options_.corpus, "Corpus file")->required();
+    f->add_option("--models", options_.models, "Model file with a face model (csw fit face)")->required();
+    f->add_option("--takes", options_.takes,
+                  "Takes, comma-separated names or glob patterns (e.g. 'visemes_*': isolated vowels and VCV); "
+                  "default every take but fill versions");
+    f->add_option("--phones", options_.phones, "The phone tier (IPA)")->capture_default_str();
+    f->add_option("--vowels", options_.fit.vowels, "The symmetric vowel contexts")
         ->delimiter(',')
         ->capture_default_str();
-    sub_->add_option("--min-w", options_.fit.min_w, "Below this |w|, c(x) is not identifiable")->capture_default_str();
-    sub_->add_option("--min-vowel-spread", options_.fit.min_vowel_spread,
-                     "w(x) is fitted only where the vowel contexts spread over this fraction of x's range")
+    f->add_option("--min-w", options_.fit.min_w, "Below this |w|, c(x) is not identifiable")->capture_default_str();
+    f->add_option("--min-vowel-spread", options_.fit.min_vowel_spread,
+                  "w(x) is fitted only where the vowel contexts spread over this fraction of x's range")
         ->capture_default_str();
-    sub_->add_option("--min-effect", options_.fit.min_effect,
-                     "Per-parameter k(t) only where |w (c - v)| is at least this fraction of the parameter's range")
+    f->add_option("--min-effect", options_.fit.min_effect,
+                  "Per-parameter k(t) only where |w (c - v)| is at least this fraction of the parameter's range")
         ->capture_default_str();
-    sub_->add_option("-o,--output", options_.output, "Write the fit (JSON, format csw-ohman)");
-    sub_->add_option("--figures", options_.figures, "Folder for the k(t) figures (PNG), one per consonant");
-    sub_->add_flag("--json", json_, "Print the report as JSON");
+    f->add_option("-o,--output", options_.output, "Write the fit (JSON, format csw-ohman)");
+    f->add_option("--figures", options_.figures, "Folder for the k(t) figures (PNG), one per consonant");
+    f->add_flag("--json", json_, "Print the report as JSON");
+    generate_ = sub_->add_subcommand("generate",
+                                     "Parameter trajectories for a phone string from a fit (csw coartic fit -o): the "
+                                     "vocalic carrier, then the consonants in increasing w order; CSV and figure");
+    CLI::App* g = generate_;
+    g->add_option("fit", gen_.fit, "Fit file (JSON, csw coartic fit -o)")->required();
+    g->add_option("--phones", gen_.phones,
+                  "Phones (IPA) separated by spaces, each optionally with :MS, its duration; _ is a pause, e.g. "
+                  "\"_ a p:100 a _\"");
+    g->add_option("--textgrid", gen_.textgrid, "Or: a TextGrid whose phone tier gives the phones and times");
+    g->add_option("--tier", gen_.tier, "The TextGrid's phone tier")->capture_default_str();
+    g->add_option("--vowel-ms", gen_.vowel_ms, "Duration of a vowel given without one")->capture_default_str();
+    g->add_option("--consonant-ms", gen_.consonant_ms, "Duration of a consonant given without one")
+        ->capture_default_str();
+    g->add_option("--pause-ms", gen_.pause_ms, "Duration of a pause given without one")->capture_default_str();
+    g->add_option("--rate", gen_.rate_hz, "Samples per second")->capture_default_str();
+    g->add_flag("--skip-unknown", gen_.skip_unknown, "Leave out phones the fit does not know instead of failing");
+    g->add_option("-o,--output", gen_.output, "CSV of the trajectories (time_s, one column per parameter)");
+    g->add_option("--figures", gen_.figures, "Folder for generated.png");
+    g->add_flag("--json", json_, "Print the report as JSON");
   }
   int Run(Progress& progress) override {
+    if (generate_->parsed()) {
+      if (std::string why = gen_.Check(); !why.empty()) throw UsageError(why);
+      const nlohmann::json r = jobs::CoarticGenerate(gen_, progress);
+      if (json_) {
+        PrintJson(r);
+      } else {
+        std::cout << jobs::CoarticGenerateText(r);
+      }
+      return 0;
+    }
     if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
     const nlohmann::json r = jobs::Ohman(options_, progress);
     if (json_) {
@@ -605,7 +719,10 @@ class OhmanCommand : public Command {
   }
 
  private:
+  CLI::App* fit_ = nullptr;
+  CLI::App* generate_ = nullptr;
   jobs::OhmanJobOptions options_;
+  jobs::CoarticGenerateOptions gen_;
   bool json_ = false;
 };
 
@@ -759,10 +876,11 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<FitCommand>());
   c.push_back(std::make_unique<InvertCommand>());
   c.push_back(std::make_unique<CleanCommand>());
+  c.push_back(std::make_unique<SegmentCommand>());
   c.push_back(std::make_unique<CueCommand>());
   c.push_back(std::make_unique<KeysCommand>());
   c.push_back(std::make_unique<PhasingCommand>());
-  c.push_back(std::make_unique<OhmanCommand>());
+  c.push_back(std::make_unique<CoarticCommand>());
   c.push_back(std::make_unique<TransitionsCommand>());
   c.push_back(std::make_unique<SignSequenceCommand>());
   c.push_back(std::make_unique<PackCommand>());

@@ -1,5 +1,5 @@
 #pragma once
-// `csw ohman`: Öhman's coarticulation model (issue 14 item 6;
+// `csw coartic fit`: Öhman's coarticulation model (issue 14 item 6;
 // docs/coarticulation.md) fitted on symmetric VCV takes. Per selected take:
 // the face model of --models (csw fit face) is inverted frame by frame, its
 // guided-PCA parameters are the articulatory parameters x, and the take's

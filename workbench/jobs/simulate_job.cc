@@ -7,6 +7,8 @@
 #include "core/error.h"
 #include "core/file_util.h"
 #include "datasets/virtual_cuer.h"
+#include "datasets/virtual_signer.h"
+#include "io/corpus/corpus.h"
 #include "synth/phasing.h"
 #include "workbench/jobs/job_util.h"
 
@@ -68,11 +70,36 @@ SimulateOptions ToSimulateOptions(const SimulateJobOptions& options) {
   return o;
 }
 
+SignerOptions ToSignerOptions(const SimulateJobOptions& options) {
+  SignerOptions o;
+  o.seed = options.seed;
+  o.rate_hz = options.rate_hz;
+  o.noise_mm = options.noise_mm;
+  ParseDurationLaw(options.law, &o.law);
+  o.hand_offset_max_s = options.hand_offset_s;
+  o.duration_noise_sd_s = options.duration_noise_s;
+  o.naming = options.naming;
+  return o;
+}
+
 std::string SimulateJobOptions::Check() const {
   if (output.empty()) return "simulate: no output folder (-o)";
+  if (corpus == "signs") {
+    DurationLaw law;
+    if (!ParseDurationLaw(this->law, &law)) return "simulate: --law must be surface or simple, not '" + this->law + "'";
+    if (count < 0) return "simulate: --count must be >= 0";
+    if (!(manual_jitter_s >= 0.0 && manual_jitter_s <= 1.0)) return "simulate: --manual-jitter must be in [0, 1] s";
+    if (!texts.empty() || !sentences_file.empty() || !phasing_file.empty())
+      return "simulate: --text, --sentences and --phasing apply to the virtual cuer, not signs";
+    std::error_code ec;
+    const fs::path out = OutputPath(output);
+    if (fs::exists(out, ec) && !fs::is_directory(out, ec)) return "simulate: -o " + output + " is a file, not a folder";
+    if (std::string why = ToSignerOptions(*this).Check(); !why.empty()) return "simulate: " + why;
+    return "";
+  }
   CorpusKind kind;
   if (corpus != "demo" && !ParseCorpusKind(corpus, &kind))
-    return "simulate: unknown corpus \"" + corpus + "\" (shapes, visemes, sentences or demo)";
+    return "simulate: unknown corpus \"" + corpus + "\" (shapes, visemes, sentences, signs or demo)";
   if (count < 0) return "simulate: --count must be >= 0";
   if (!texts.empty() && !sentences_file.empty()) return "simulate: give --text or --sentences, not both";
   if (corpus == "shapes" || corpus == "visemes") {
@@ -97,8 +124,60 @@ std::string SimulateJobOptions::Check() const {
   return "";
 }
 
+namespace {
+
+// The virtual signer's corpus and truth files into `dir`.
+std::vector<std::string> SimulateSigns(const SimulateJobOptions& options, const fs::path& dir, Progress& progress) {
+  const SignerOptions so = ToSignerOptions(options);
+  const VirtualSigner signer(so);
+  fs::create_directories(dir);
+  const int count = options.count > 0 ? options.count : 20;
+  std::vector<std::string> names;
+  CorpusTransaction tx((dir / "signs.h5").string());
+  for (int i = 0; i < count; ++i) {
+    progress.Update("virtual signer", static_cast<double>(i) / count);
+    progress.CheckCancel();
+    const SignerTake t = signer.SimulateTake(i);
+    Take take = t.take;
+    if (options.manual_jitter_s > 0)
+      take.tiers.push_back(
+          JitterBoundaries(take.tiers[0], "manual", options.manual_jitter_s, so.rate_hz, so.seed * 1000 + i));
+    tx.WriteTake(take);
+    std::ofstream out(dir / (take.name + ".truth.json"));
+    out << SignerTruthToJson(t, so);
+    if (!out) throw IoError((dir / (take.name + ".truth.json")).string(), "cannot write the ground truth");
+    names.push_back(take.name);
+  }
+  tx.Commit();
+  return names;
+}
+
+}  // namespace
+
 std::vector<std::string> Simulate(const SimulateJobOptions& options, Progress& progress) {
   if (std::string why = options.Check(); !why.empty()) throw UsageError(why);
+  if (options.corpus == "signs") {
+    const fs::path out = OutputPath(options.output);
+    const fs::path partial = HiddenSibling(out.string(), ".csw-partial");
+    std::error_code ec;
+    fs::remove_all(partial, ec);
+    std::vector<std::string> names;
+    try {
+      names = SimulateSigns(options, partial, progress);
+      if (!fs::exists(out, ec)) {
+        if (!out.parent_path().empty()) fs::create_directories(out.parent_path(), ec);
+        fs::rename(partial, out, ec);
+        if (ec) throw IoError(out.string(), "cannot move the simulated corpus into place: " + ec.message());
+      } else {
+        MoveInto(partial, out);
+        fs::remove_all(partial, ec);
+      }
+    } catch (...) {
+      fs::remove_all(partial, ec);
+      throw;
+    }
+    return names;
+  }
   SimulateOptions o = ToSimulateOptions(options);
   if (!options.sentences_file.empty()) o.sentences = ReadSentences(options.sentences_file);
   if (!options.phasing_file.empty()) o.phasing = LoadPhasingModel(options.phasing_file);

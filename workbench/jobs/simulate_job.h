@@ -8,7 +8,8 @@
 
 namespace csw {
 struct SimulateOptions;
-}
+struct SignerOptions;
+}  // namespace csw
 
 namespace csw::jobs {
 
@@ -34,11 +35,24 @@ struct SimulateJobOptions {
   // Phasing-model JSON (synth/phasing.h LoadPhasingModel) for the gesture
   // times; "" = the defaults. Read by Simulate (a bad file: ParseError naming it).
   std::string phasing_file;
-  std::string Check() const;  // "" when valid, else the reason (a usage error)
+  // signs (the virtual signer, datasets/virtual_signer.h): the corpus
+  // <output>/signs.h5 of `count` takes (0 = 20) and <output>/<take>.truth.json;
+  // rate_hz, noise_mm and seed apply. The transition duration law (surface or
+  // simple), and an annotator's tier "manual": the `signs` tier with every
+  // boundary moved by up to manual_jitter_s (0 = no such tier).
+  std::string law = "surface";
+  double manual_jitter_s = 0.1;
+  double hand_offset_s = 0.03;    // each hand's movements shifted by up to this (0 = synchronous hands)
+  double duration_noise_s = 0.0;  // Gaussian noise added to the law (0 = the law exactly)
+  std::string naming = "csw";     // joint names: csw or mixamo
+  std::string Check() const;      // "" when valid, else the reason (a usage error)
 };
 
 // The datasets options for `options` (sentences_file and phasing_file not read yet).
 SimulateOptions ToSimulateOptions(const SimulateJobOptions& options);
+
+// The virtual signer's options for `options` (corpus "signs").
+SignerOptions ToSignerOptions(const SimulateJobOptions& options);
 
 // Writes everything into a hidden sibling folder ".<output>.csw-partial" and
 // moves it into place at the end, so a failed or cancelled run changes nothing

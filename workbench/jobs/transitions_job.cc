@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 
+#include "analysis/signing/segmentation.h"
 #include "core/error.h"
 #include "core/file_util.h"
 #include "io/corpus/corpus.h"
@@ -24,12 +25,6 @@ using nlohmann::json;
 
 namespace {
 
-std::string Lower(const std::string& s) {
-  std::string out;
-  for (char c : s) out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
-
 double UnitMm(const std::string& unit) {
   if (unit == "m") return 1000.0;
   if (unit == "dm") return 100.0;
@@ -40,18 +35,10 @@ double UnitMm(const std::string& unit) {
 
 double Round(double v, double step) { return std::isfinite(v) ? std::round(v / step) * step : v; }
 
-// "right", "left" or "" from a tier or joint name.
+// "right", "left" or "" from a tier name (the side rules of csw segment).
 std::string SideOf(const std::string& name) {
-  const std::string l = Lower(name);
-  if (l.find("right") != std::string::npos) return "right";
-  if (l.find("left") != std::string::npos) return "left";
-  if (name.size() >= 2 && (name[0] == 'r' || name[0] == 'R' || name[0] == 'l' || name[0] == 'L')) {
-    const char next = name[1];
-    if (next == '_' || next == '-' || next == '.' || next == ' ' || std::isupper(static_cast<unsigned char>(next))) {
-      return (name[0] == 'r' || name[0] == 'R') ? "right" : "left";
-    }
-  }
-  return "";
+  const char side = signing::NameSide(name);
+  return side == 'R' ? "right" : side == 'L' ? "left" : "";
 }
 
 // The wrist joint each hand tier uses, from --wrists or FindWrist.
@@ -117,19 +104,16 @@ std::string CsvField(const std::string& s) {
 }  // namespace
 
 int FindWrist(const std::vector<SkeletonJoint>& skeleton, const std::string& side) {
-  int hand = -1;
-  for (size_t j = 0; j < skeleton.size(); ++j) {
-    const SkeletonJoint& joint = skeleton[j];
-    if (joint.end_site || SideOf(joint.name) != side) continue;
-    const std::string l = Lower(joint.name);
-    if (l.find("wrist") != std::string::npos) return static_cast<int>(j);
-    const bool finger = l.find("finger") != std::string::npos || l.find("thumb") != std::string::npos ||
-                        l.find("index") != std::string::npos || l.find("middle") != std::string::npos ||
-                        l.find("ring") != std::string::npos || l.find("pinky") != std::string::npos ||
-                        l.find("little") != std::string::npos || l.find("end") != std::string::npos;
-    if (hand < 0 && !finger && l.find("hand") != std::string::npos) hand = static_cast<int>(j);
+  // The rules of csw segment (analysis/signing/segmentation.h FindWrists), on
+  // the joints (end sites are not wrists).
+  std::vector<std::string> names;
+  for (const SkeletonJoint& j : skeleton) names.push_back(j.end_site ? std::string() : j.name);
+  try {
+    const signing::WristJoints w = signing::FindWrists(names, "", "", side == "right", side == "left");
+    return static_cast<int>(side == "right" ? w.right : w.left);
+  } catch (const InvalidInput&) {
+    return -1;  // none found: the caller says what to do about it
   }
-  return hand;
 }
 
 std::string TransitionsOptions::Check() const {

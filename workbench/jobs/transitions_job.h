@@ -42,10 +42,9 @@ struct TransitionsOptions {
   std::string Check() const;
 };
 
-// The wrist joint of one side ("right" or "left") of a skeleton: a joint whose
-// name says the side (contains "right"/"left", or starts with r/l followed by a
-// separator or a capital: "r_wrist", "RWrist", "RightHand") and a wrist ("wrist",
-// else "hand" that is not a finger or thumb joint). -1 when none.
+// The wrist joint of one side ("right" or "left") of a skeleton, by the rules
+// of csw segment (analysis/signing/segmentation.h FindWrists: a name with
+// "wrist", else one whose stem ends in "hand", of that side). -1 when none.
 int FindWrist(const std::vector<SkeletonJoint>& skeleton, const std::string& side);
 
 // The analysis on takes in memory (what Transitions does after loading them).
