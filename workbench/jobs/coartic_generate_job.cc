@@ -97,7 +97,7 @@ json CoarticGenerate(const CoarticGenerateOptions& options, Progress& progress) 
   }
   phones = coarticulation::NormalisePhones(phones, end_s);
   const double duration = std::max(end_s, phones.empty() ? 0.0 : phones.back().end_s);
-  const auto samples = static_cast<int64_t>(std::floor(duration * options.rate_hz)) + 1;
+  const auto samples = static_cast<int64_t>(std::floor(duration * options.rate_hz + 1e-6)) + 1;
   std::vector<double> times(static_cast<size_t>(samples));
   for (int64_t i = 0; i < samples; ++i) times[static_cast<size_t>(i)] = static_cast<double>(i) / options.rate_hz;
   coarticulation::GenerateOptions g;

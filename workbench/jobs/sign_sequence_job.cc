@@ -297,9 +297,15 @@ json SignSequence(const SignSequenceOptions& options, Progress& progress) {
     }
   }
   const double duration = out.duration_s();
-  signs_tier.end_s = source_tier.end_s = duration;
+  // The tiers end at the last frame's time, where the last sign ends.
+  signs_tier.end_s = source_tier.end_s = static_cast<double>(out.frames() - 1) / rate;
   std::filesystem::path tg = options.output;
   tg.replace_extension(".TextGrid");
+  if (const std::filesystem::path dir = std::filesystem::path(options.output).parent_path(); !dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw IoError(options.output, "cannot create its folder: " + ec.message());
+  }
   WriteBvh(options.output, out);
   WriteTextGrid(tg.string(), {FillIntervalGaps(signs_tier), FillIntervalGaps(source_tier)}, 0.0, duration);
   result["output"] = options.output;

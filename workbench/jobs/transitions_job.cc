@@ -311,6 +311,22 @@ json AnalyseTransitions(const std::vector<Take>& takes, const TransitionsOptions
                                PlotSeries::Style::kLine,
                                3});
       }
+      if (m.kind == signing::DurationModelKind::kSurface && !all.empty()) {
+        // The fitted plane seen from the geodesic axis: its lines at the
+        // quartiles of the Euclidean distance (the seed's Fig. 11 in 2-D).
+        std::vector<double> es = e;
+        std::sort(es.begin(), es.end());
+        const double g_lo = *std::min_element(g.begin(), g.end()), g_hi = *std::max_element(g.begin(), g.end());
+        for (double q : {0.25, 0.5, 0.75}) {
+          const double eq = es[static_cast<size_t>(q * static_cast<double>(es.size() - 1))];
+          geo.series.push_back(
+              {q == 0.5 ? std::string("SURFACE at the quartiles of E") : std::string(),
+               {g_lo, g_hi},
+               {m.theta[0] + m.theta[1] * g_lo + m.theta[2] * eq, m.theta[0] + m.theta[1] * g_hi + m.theta[2] * eq},
+               PlotSeries::Style::kDashed,
+               4});
+        }
+      }
       PlotSeries s{std::string(signing::DurationModelName(m.kind)), {}, {}, PlotSeries::Style::kPoints, colour++};
       for (const signing::Transition& t : all) {
         s.x.push_back(t.duration_s);
@@ -318,7 +334,7 @@ json AnalyseTransitions(const std::vector<Take>& takes, const TransitionsOptions
       }
       fit.series.push_back(s);
     }
-    fit.series.push_back({"measured = predicted", {d_lo, d_hi}, {d_lo, d_hi}, PlotSeries::Style::kDashed, 7});
+    fit.series.push_back({"predicted = measured", {d_lo, d_hi}, {d_lo, d_hi}, PlotSeries::Style::kDashed, 7});
     const std::string png = (std::filesystem::path(options.figures) / "transitions.png").string();
     figures::SavePlots(png, "Transitions: " + std::to_string(all.size()) + " from " + options.corpus,
                        {fig7, fit, euclid, geo}, 2);

@@ -420,7 +420,7 @@ void SavePlots(const std::string& path, const std::string& title, const std::vec
   const int n = static_cast<int>(panels.size());
   const int cols = columns > 0 ? std::min(columns, n) : std::min(2, n);
   const int rows = (n + cols - 1) / cols;
-  Canvas plot(std::max(700, 480 * cols), 90 + 360 * rows);
+  Canvas plot(std::max(700, 580 * cols), 90 + 380 * rows);
   plot.plotLayout()->clear();
   auto* grid = new QCPLayoutGrid;
   plot.plotLayout()->addElement(0, 0, grid);
@@ -486,6 +486,8 @@ void SavePlots(const std::string& path, const std::string& title, const std::vec
     auto* legend = new QCPLegend;
     AddHeader(plot, title, legend);
     legend->setLayer(QStringLiteral("legend"));
+    // More than five entries: rows of four, so that none is cut short.
+    if (legend_entries.size() > 5) legend->setWrap(4);
     for (auto& [name, g] : legend_entries) {
       g->setName(Q(name));
       g->addToLegend(legend);
