@@ -6,7 +6,12 @@
 # sentences (out/demo/models.h5), inverts them on every sentence, fills the gaps
 # as new takes, trains the key recogniser on the filled training sentences
 # (out/demo/keys.h5), scores every filled sentence, measures the phasing and
-# writes the figures to out/demo/figures. Regenerate the demo
+# writes the figures to out/demo/figures; then fits Öhman's coarticulation model
+# on the viseme takes and generates a new phone string (out/demo/coartic), and
+# runs the sign-language tools on the virtual signer (out/demo/signs: simulate,
+# segment, transitions and their duration models, a new sign sequence as BVH).
+# It ends by printing the command that opens the corpus in csw-workbench.
+# Regenerate the demo
 # corpus with:
 #   csw simulate demo --seed 1 -o datasets/demo
 set -euo pipefail
@@ -15,6 +20,10 @@ bash scripts/install-deps.sh
 export CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache}
 cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DCSW_BUILD_TESTS=OFF -DCSW_BUILD_BENCH=OFF >/dev/null
 cmake --build build/release -j"$(nproc)" --target csw
+# The desktop app and the figures module, when Qt6 is there (install-deps.sh installs it).
+if cmake --build build/release --target help 2>/dev/null | grep -q 'csw-workbench'; then
+  cmake --build build/release -j"$(nproc)" --target csw-workbench csw_figures
+fi
 csw=build/release/workbench/cli/csw
 demo=datasets/demo
 if [ ! -f "$demo/sentences/markerset.json" ]; then
@@ -51,3 +60,23 @@ echo "== csw keys score on every filled sentence (gestural score, free and align
 "$csw" keys score out/demo/corpus.h5 --keys out/demo/keys.h5 --takes "$filled"
 echo "== csw phasing (times relative to A1; histograms and gestural scores in out/demo/figures)"
 "$csw" phasing out/demo/corpus.h5 --keys out/demo/keys.h5 --takes "$filled" --figures out/demo/figures
+echo "== csw coartic fit on the viseme takes, then csw coartic generate a new phone string (out/demo/coartic)"
+mkdir -p out/demo/coartic
+"$csw" coartic fit out/demo/corpus.h5 --models out/demo/models.h5 --takes 'visemes*' \
+  -o out/demo/coartic/ohman.json --figures out/demo/coartic
+"$csw" coartic generate out/demo/coartic/ohman.json --phones "_ a p a _ i s i _ u l u _" \
+  -o out/demo/coartic/generated.csv --figures out/demo/coartic
+echo "== sign language on the virtual signer (out/demo/signs): simulate, segment, transitions, a new sequence"
+rm -rf out/demo/signs
+"$csw" simulate signs --count 30 --seed 1 -o out/demo/signs
+"$csw" segment out/demo/signs/signs.h5 --tier manual
+"$csw" transitions out/demo/signs/signs.h5 --tiers manual_right,manual_left \
+  -o out/demo/signs/durations_per_hand.json --figures out/demo/signs/figures_per_hand
+"$csw" transitions out/demo/signs/signs.h5 --tiers signs --joints all \
+  -o out/demo/signs/durations.json --figures out/demo/signs/figures
+"$csw" sign-sequence out/demo/signs/signs.h5 --glosses HELLO,MUSEUM,TO_PAY,SWIMMING_POOL \
+  --durations out/demo/signs/durations.json -o out/demo/signs/sequence/hello_museum.bvh
+if [ -x build/release/workbench/gui/csw-workbench ]; then
+  echo "== open the demo corpus in the desktop app:"
+  echo "   build/release/workbench/gui/csw-workbench out/demo/corpus.h5"
+fi
