@@ -120,6 +120,76 @@ std::vector<DikeyUnit> ExtractDikeys(const TakeSeries& s, const DikeyOptions& op
   return out;
 }
 
+std::vector<DiphoneUnit> ExtractDiphones(const TakeSeries& s, const DikeyOptions& options, ExtractionStats* stats) {
+  if (const std::string why = options.Check(); !why.empty()) throw InvalidInput(why);
+  const std::string where = "take '" + s.take + "'";
+  if (!(s.rate_hz > 0) || !std::isfinite(s.rate_hz)) throw InvalidInput(where + ": frame rate must be positive");
+  const int64_t n = s.face_params.rows();
+  if (s.hand_params.rows() != 0 && n != s.hand_params.rows()) {
+    throw InvalidInput(where + ": face parameters have " + std::to_string(n) + " frames, hand parameters " +
+                       std::to_string(s.hand_params.rows()));
+  }
+  for (size_t i = 0; i < s.phones.size(); ++i) {
+    const Label& p = s.phones[i];
+    if (!std::isfinite(p.start_s) || !std::isfinite(p.end_s) || p.end_s < p.start_s ||
+        (i > 0 && p.start_s < s.phones[i - 1].end_s - 1e-9)) {
+      throw InvalidInput(where + ": phone " + std::to_string(i + 1) + " ('" + p.text +
+                         "') overlaps the previous one, is out of order or has a bad time");
+    }
+  }
+  ExtractionStats local;
+  std::vector<DiphoneUnit> out;
+  for (size_t i = 0; i + 1 < s.phones.size(); ++i) {
+    ++local.successions;
+    const Label &a = s.phones[i], &b = s.phones[i + 1];
+    const double t0 = 0.5 * (a.start_s + a.end_s), t1 = 0.5 * (b.start_s + b.end_s);
+    const int64_t f0 = static_cast<int64_t>(std::llround(t0 * s.rate_hz));
+    const int64_t f1 = static_cast<int64_t>(std::llround(t1 * s.rate_hz));
+    if (f0 < 0 || f1 >= n || f1 < f0) {
+      ++local.rejected_outside;
+      continue;
+    }
+    const int64_t count = f1 - f0 + 1;
+    int64_t unsolved = 0;
+    for (int64_t f = f0; f <= f1; ++f)
+      if (!RowFinite(s.face_params, f)) ++unsolved;
+    if (static_cast<double>(unsolved) > options.max_unsolved_fraction * static_cast<double>(count)) {
+      ++local.rejected_unsolved;
+      continue;
+    }
+    DiphoneUnit u;
+    u.take = s.take;
+    u.index = static_cast<int>(i);
+    u.phone1 = a.text.empty() ? "_" : a.text;
+    u.phone2 = b.text.empty() ? "_" : b.text;
+    u.phone1_start_s = a.start_s;
+    u.phone1_end_s = a.end_s;
+    u.phone2_start_s = b.start_s;
+    u.phone2_end_s = b.end_s;
+    u.start_s = t0;
+    u.end_s = t1;
+    u.first_frame = f0;
+    u.rate_hz = s.rate_hz;
+    u.audio_path = s.audio_path;
+    u.face_params = s.face_params.middleRows(f0, count);
+    out.push_back(std::move(u));
+    ++local.kept;
+  }
+  if (stats) {
+    stats->successions += local.successions;
+    stats->kept += local.kept;
+    stats->rejected_unsolved += local.rejected_unsolved;
+    stats->rejected_outside += local.rejected_outside;
+  }
+  return out;
+}
+
+std::vector<std::pair<std::string, int>> DiphoneCoverage(const std::vector<DiphoneUnit>& units) {
+  std::map<std::string, int> codes;
+  for (const DiphoneUnit& u : units) codes[u.phone1 + "+" + u.phone2] += 1;
+  return {codes.begin(), codes.end()};
+}
+
 std::string SuccessionCode(const KeyCode& from, const KeyCode& to) { return from.Text() + "-" + to.Text(); }
 
 namespace {

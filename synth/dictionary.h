@@ -37,6 +37,11 @@ struct TakeSeries {
   // Acoustic onset (s) of the syllable each key codes, one per mark, NaN when
   // unknown (rests, or no phone tier): gives DikeyUnit::phasing_s.
   std::vector<double> syllable_onset_s;
+  // For diphones: the face model's parameters (frames × Q; empty = no
+  // diphones) and the phones, contiguous, in time order, label "_" = pause.
+  Eigen::MatrixXd face_params;
+  std::vector<Label> phones;
+  std::string audio_path;  // the take's source WAV, "" when none
   int64_t frames() const { return hand_params.rows(); }
 };
 
@@ -91,12 +96,43 @@ std::vector<KeyMark> KeysWithRests(const std::vector<KeyMark>& keys, double last
 // `a` (a⁻¹ ∘ b), NaN when either has a NaN.
 Eigen::Matrix<double, 6, 1> RelativePose(const Eigen::Matrix<double, 6, 1>& a, const Eigen::Matrix<double, 6, 1>& b);
 
+// A diphone: from the middle of one phone to the middle of the next (pauses
+// "_" included, so that units leave and reach silence), with the face model's
+// parameters per frame and a reference to the audio segment.
+struct DiphoneUnit {
+  std::string take;
+  int index = 0;  // the first phone's index in the take's phones
+  std::string phone1, phone2;
+  double phone1_start_s = 0, phone1_end_s = 0;  // the phones' own intervals (take clock)
+  double phone2_start_s = 0, phone2_end_s = 0;
+  double start_s = 0, end_s = 0;  // the unit: middle of phone 1 to middle of phone 2
+  int64_t first_frame = 0;        // round(start_s · rate)
+  double rate_hz = 0;
+  std::string audio_path;       // the take's source WAV ("" when none); the segment is [start_s, end_s]
+  Eigen::MatrixXd face_params;  // frames × Q, rows = frames first_frame .. round(end_s · rate)
+  double duration_s() const { return end_s - start_s; }
+  int64_t frames() const { return face_params.rows(); }
+};
+
+// The diphones of one take (series.phones and series.face_params), in time
+// order. Units with unsolved frames are left out as DikeyOptions says
+// (counted in stats). Throws InvalidInput naming the take when face_params
+// has another number of frames than the hand parameters, or the phones
+// overlap or are out of order.
+std::vector<DiphoneUnit> ExtractDiphones(const TakeSeries& series, const DikeyOptions& options = {},
+                                         ExtractionStats* stats = nullptr);
+
+// Distinct diphones "p1+p2" and their candidates, sorted.
+std::vector<std::pair<std::string, int>> DiphoneCoverage(const std::vector<DiphoneUnit>& units);
+
 struct Dictionary {
   std::string models_fingerprint;  // ModelsFingerprint of the models the parameters belong to
   // Provenance (as given to csw dict build; "" when unknown).
   std::string corpus, models_file, keys_file, key_tier;
   std::vector<std::string> hand_parameter_names;  // P
   std::vector<DikeyUnit> dikeys;
+  std::vector<std::string> face_parameter_names;  // Q
+  std::vector<DiphoneUnit> diphones;
 };
 
 // Coverage of successions: counts[from][to] of placement (6 × 6, 0 = rest /

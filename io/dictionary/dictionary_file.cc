@@ -96,6 +96,67 @@ void Validate(const dict::Dictionary& d) {
       throw InvalidInput(what + ": per-frame series of different lengths (or poses without 6 columns)");
     }
   }
+  const Eigen::Index q = static_cast<Eigen::Index>(d.face_parameter_names.size());
+  for (size_t i = 0; i < d.diphones.size(); ++i) {
+    const dict::DiphoneUnit& u = d.diphones[i];
+    if (u.face_params.cols() != q) {
+      throw InvalidInput("diphone " + std::to_string(i) + " (take '" + u.take + "', " + u.phone1 + "+" + u.phone2 +
+                         "): " + std::to_string(u.face_params.cols()) + " face parameters, the dictionary names " +
+                         std::to_string(q));
+    }
+  }
+}
+
+void WriteDiphones(hid_t f, const dict::Dictionary& d, const Where& where) {
+  const size_t n = d.diphones.size();
+  Handle g = h5::CreateGroup(f, "diphones", where, "/diphones");
+  h5::WriteAttr(g.get(), "count", static_cast<int64_t>(n), where, "/diphones");
+  std::vector<std::string> take(n), phone1(n), phone2(n), audio(n);
+  std::vector<int64_t> index(n), first_frame(n), offset(n), frames(n);
+  std::vector<double> p1s(n), p1e(n), p2s(n), p2e(n), start_s(n), end_s(n), duration_s(n), rate_hz(n);
+  int64_t total = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const dict::DiphoneUnit& u = d.diphones[i];
+    take[i] = u.take;
+    phone1[i] = u.phone1;
+    phone2[i] = u.phone2;
+    audio[i] = u.audio_path;
+    index[i] = u.index;
+    first_frame[i] = u.first_frame;
+    offset[i] = total;
+    frames[i] = u.frames();
+    total += u.frames();
+    p1s[i] = u.phone1_start_s;
+    p1e[i] = u.phone1_end_s;
+    p2s[i] = u.phone2_start_s;
+    p2e[i] = u.phone2_end_s;
+    start_s[i] = u.start_s;
+    end_s[i] = u.end_s;
+    duration_s[i] = u.duration_s();
+    rate_hz[i] = u.rate_hz;
+  }
+  RowMajor face(total, static_cast<Eigen::Index>(d.face_parameter_names.size()));
+  for (size_t i = 0; i < n; ++i) face.middleRows(offset[i], frames[i]) = d.diphones[i].face_params;
+  const hid_t gi = g.get();
+  auto obj = [](const char* name) { return std::string("/diphones/") + name; };
+  h5::WriteStrings(gi, "take", take, where, obj("take"));
+  h5::WriteStrings(gi, "phone1", phone1, where, obj("phone1"));
+  h5::WriteStrings(gi, "phone2", phone2, where, obj("phone2"));
+  h5::WriteStrings(gi, "audio_path", audio, where, obj("audio_path"));
+  WriteInts(gi, "phone_index", index, where, obj("phone_index"));
+  WriteInts(gi, "first_frame", first_frame, where, obj("first_frame"));
+  WriteInts(gi, "offset", offset, where, obj("offset"));
+  WriteInts(gi, "frames", frames, where, obj("frames"));
+  h5::WriteDoubles(gi, "phone1_start_s", p1s, where, obj("phone1_start_s"));
+  h5::WriteDoubles(gi, "phone1_end_s", p1e, where, obj("phone1_end_s"));
+  h5::WriteDoubles(gi, "phone2_start_s", p2s, where, obj("phone2_start_s"));
+  h5::WriteDoubles(gi, "phone2_end_s", p2e, where, obj("phone2_end_s"));
+  h5::WriteDoubles(gi, "start_s", start_s, where, obj("start_s"));
+  h5::WriteDoubles(gi, "end_s", end_s, where, obj("end_s"));
+  h5::WriteDoubles(gi, "duration_s", duration_s, where, obj("duration_s"));
+  h5::WriteDoubles(gi, "rate_hz", rate_hz, where, obj("rate_hz"));
+  h5::WriteStrings(gi, "face_parameter_names", d.face_parameter_names, where, obj("face_parameter_names"));
+  WriteRows(gi, "face_params", face, where, obj("face_params"));
 }
 
 }  // namespace
@@ -188,6 +249,8 @@ void SaveDictionaryFile(const std::string& path, const dict::Dictionary& d) {
     WriteRows(gi, "forearm_in_head", forearm, where, obj("forearm_in_head"));
     WriteRows(gi, "head_pose", head, where, obj("head_pose"));
 
+    WriteDiphones(f, d, where);
+
     const dict::Coverage c = dict::CoverageOfUnits(d.dikeys);
     Handle cg = h5::CreateGroup(f, "coverage", where, "/coverage");
     WriteIntMatrix(cg.get(), "placement_counts", c.placement, where, "/coverage/placement_counts");
@@ -200,6 +263,14 @@ void SaveDictionaryFile(const std::string& path, const dict::Dictionary& d) {
     }
     h5::WriteStrings(cg.get(), "successions", codes, where, "/coverage/successions");
     WriteInts(cg.get(), "succession_counts", counts, where, "/coverage/succession_counts");
+    codes.clear();
+    counts.clear();
+    for (const auto& [code, count] : dict::DiphoneCoverage(d.diphones)) {
+      codes.push_back(code);
+      counts.push_back(count);
+    }
+    h5::WriteStrings(cg.get(), "diphones", codes, where, "/coverage/diphones");
+    WriteInts(cg.get(), "diphone_counts", counts, where, "/coverage/diphone_counts");
     h5::Check(H5Fflush(f, H5F_SCOPE_GLOBAL), where, "cannot flush", temp);
     if (!file.Reset()) throw IoError(path, "cannot close " + temp + ": " + h5::TakeErrorMessage());
   }
@@ -215,8 +286,8 @@ namespace {
 
 // A numeric dataset of the given rank; returns its values (row-major) and dims.
 std::vector<double> ReadNumbers(hid_t g, const std::string& name, size_t rank, std::vector<hsize_t>* dims,
-                                const std::string& path) {
-  const std::string object = "/dikeys/" + name;
+                                const std::string& path, const std::string& group = "/dikeys/") {
+  const std::string object = group + name;
   if (!h5::LinkExists(g, name)) Fail(path, "missing " + object);
   const Where where{path};
   Handle ds = h5::OpenDataset(g, name, where, object);
@@ -226,20 +297,22 @@ std::vector<double> ReadNumbers(hid_t g, const std::string& name, size_t rank, s
   return h5::ReadDoubles(g, name, where, object);
 }
 
-std::vector<double> ReadVector(hid_t g, const std::string& name, size_t n, const std::string& path) {
+std::vector<double> ReadVector(hid_t g, const std::string& name, size_t n, const std::string& path,
+                               const std::string& group = "/dikeys/") {
   std::vector<hsize_t> dims;
-  std::vector<double> v = ReadNumbers(g, name, 1, &dims, path);
+  std::vector<double> v = ReadNumbers(g, name, 1, &dims, path, group);
   if (v.size() != n) {
-    Fail(path, "/dikeys/" + name + " has " + std::to_string(v.size()) + " values, expected " + std::to_string(n));
+    Fail(path, group + name + " has " + std::to_string(v.size()) + " values, expected " + std::to_string(n));
   }
   return v;
 }
 
-RowMajor ReadRows(hid_t g, const std::string& name, hsize_t rows, hsize_t cols, const std::string& path) {
+RowMajor ReadRows(hid_t g, const std::string& name, hsize_t rows, hsize_t cols, const std::string& path,
+                  const std::string& group = "/dikeys/") {
   std::vector<hsize_t> dims;
-  std::vector<double> v = ReadNumbers(g, name, 2, &dims, path);
+  std::vector<double> v = ReadNumbers(g, name, 2, &dims, path, group);
   if (dims[0] != rows || dims[1] != cols) {
-    Fail(path, "/dikeys/" + name + " has shape (" + std::to_string(dims[0]) + ", " + std::to_string(dims[1]) +
+    Fail(path, group + name + " has shape (" + std::to_string(dims[0]) + ", " + std::to_string(dims[1]) +
                    "), expected (" + std::to_string(rows) + ", " + std::to_string(cols) + ")");
   }
   return Eigen::Map<const RowMajor>(v.data(), static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
@@ -252,6 +325,64 @@ KeyCode Code(double placement, double shape, size_t i, const std::string& path, 
                    ", " + std::to_string(shape) + ")");
   }
   return KeyCode{p, s};
+}
+
+std::vector<std::string> ReadStringList(hid_t g, const std::string& name, size_t n, const std::string& path,
+                                        const std::string& group) {
+  if (!h5::LinkExists(g, name)) Fail(path, "missing " + group + name);
+  std::vector<std::string> v = h5::ReadStrings(g, name, Where{path}, group + name);
+  if (n != static_cast<size_t>(-1) && v.size() != n) {
+    Fail(path, group + name + " has " + std::to_string(v.size()) + " values, expected " + std::to_string(n));
+  }
+  return v;
+}
+
+void ReadDiphones(hid_t f, const std::string& path, dict::Dictionary* d) {
+  if (!h5::LinkExists(f, "diphones")) return;  // a dictionary of dikeys only
+  const Where where{path};
+  const std::string grp = "/diphones/";
+  Handle g = h5::OpenGroup(f, "diphones", where, "/diphones");
+  const hid_t gi = g.get();
+  const std::optional<int64_t> count = h5::ReadAttrInt(gi, "count", where, "/diphones");
+  if (!count || *count < 0) Fail(path, "missing or negative attribute count of /diphones");
+  const size_t n = static_cast<size_t>(*count);
+  const auto take = ReadStringList(gi, "take", n, path, grp);
+  const auto phone1 = ReadStringList(gi, "phone1", n, path, grp);
+  const auto phone2 = ReadStringList(gi, "phone2", n, path, grp);
+  const auto audio = ReadStringList(gi, "audio_path", n, path, grp);
+  d->face_parameter_names = ReadStringList(gi, "face_parameter_names", static_cast<size_t>(-1), path, grp);
+  const auto index = ReadVector(gi, "phone_index", n, path, grp);
+  const auto first_frame = ReadVector(gi, "first_frame", n, path, grp);
+  const auto offset = ReadVector(gi, "offset", n, path, grp), frames = ReadVector(gi, "frames", n, path, grp);
+  const auto p1s = ReadVector(gi, "phone1_start_s", n, path, grp), p1e = ReadVector(gi, "phone1_end_s", n, path, grp);
+  const auto p2s = ReadVector(gi, "phone2_start_s", n, path, grp), p2e = ReadVector(gi, "phone2_end_s", n, path, grp);
+  const auto start_s = ReadVector(gi, "start_s", n, path, grp), end_s = ReadVector(gi, "end_s", n, path, grp);
+  const auto rate_hz = ReadVector(gi, "rate_hz", n, path, grp);
+  std::vector<hsize_t> dims;
+  ReadNumbers(gi, "face_params", 2, &dims, path, grp);
+  const hsize_t total = dims[0];
+  const RowMajor face = ReadRows(gi, "face_params", total, d->face_parameter_names.size(), path, grp);
+  d->diphones.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (!(offset[i] >= 0 && frames[i] >= 0 && offset[i] + frames[i] <= static_cast<double>(total))) {
+      Fail(path, "/diphones: unit " + std::to_string(i) + " has rows out of range");
+    }
+    dict::DiphoneUnit& u = d->diphones[i];
+    u.take = take[i];
+    u.index = static_cast<int>(index[i]);
+    u.phone1 = phone1[i];
+    u.phone2 = phone2[i];
+    u.audio_path = audio[i];
+    u.phone1_start_s = p1s[i];
+    u.phone1_end_s = p1e[i];
+    u.phone2_start_s = p2s[i];
+    u.phone2_end_s = p2e[i];
+    u.start_s = start_s[i];
+    u.end_s = end_s[i];
+    u.first_frame = static_cast<int64_t>(first_frame[i]);
+    u.rate_hz = rate_hz[i];
+    u.face_params = face.middleRows(static_cast<Eigen::Index>(offset[i]), static_cast<Eigen::Index>(frames[i]));
+  }
 }
 
 }  // namespace
@@ -340,6 +471,7 @@ dict::Dictionary LoadDictionaryFile(const std::string& path) {
     u.forearm_in_head = forearm.middleRows(o, k);
     u.head_pose = head.middleRows(o, k);
   }
+  ReadDiphones(f, path, &d);
   return d;
 }
 

@@ -200,6 +200,33 @@ TEST_F(DictJob, HoldsExactlyTheCorpusKeySuccessions) {
     }
   }
   EXPECT_EQ(phased, successions - static_cast<int>(fx.sims.size()));
+
+  // Diphones: every succession of two (non-pause) phones of the simulator's
+  // utterance, middle to middle, in order, with solved face parameters.
+  ASSERT_EQ(d.face_parameter_names.size(), static_cast<size_t>(m.face->num_parameters()));
+  EXPECT_EQ(r["diphones"]["rejected_unsolved"], 0);
+  EXPECT_EQ(r["diphones"]["kept"], r["diphones"]["successions"]);
+  for (const SimulationResult& s : fx.sims) {
+    std::vector<std::string> want, got;
+    const auto& ph = s.utterance.phones;
+    for (size_t i = 0; i + 1 < ph.size(); ++i) {
+      if (ph[i].ipa.empty() || ph[i + 1].ipa.empty()) continue;
+      char buf[96];
+      std::snprintf(buf, sizeof(buf), "%s+%s %.6f %.6f", ph[i].ipa.c_str(), ph[i + 1].ipa.c_str(),
+                    0.5 * (ph[i].start_s + ph[i].end_s), 0.5 * (ph[i + 1].start_s + ph[i + 1].end_s));
+      want.push_back(buf);
+    }
+    for (const dict::DiphoneUnit& u : d.diphones) {
+      if (u.take != s.take.name || u.phone1 == "_" || u.phone2 == "_") continue;
+      EXPECT_TRUE(u.face_params.allFinite());
+      EXPECT_EQ(u.frames(), std::llround(u.end_s * 120.0) - std::llround(u.start_s * 120.0) + 1);
+      char buf[96];
+      std::snprintf(buf, sizeof(buf), "%s+%s %.6f %.6f", u.phone1.c_str(), u.phone2.c_str(), u.start_s, u.end_s);
+      got.push_back(buf);
+    }
+    EXPECT_FALSE(want.empty());
+    EXPECT_EQ(got, want) << s.take.name;
+  }
 }
 
 TEST_F(DictJob, ForearmPoseRelativeToTheHeadRepeatsPerKey) {

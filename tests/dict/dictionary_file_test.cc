@@ -48,6 +48,26 @@ dict::Dictionary SmallDictionary() {
     }
     d.dikeys.push_back(u);
   }
+  d.face_parameter_names = {"jaw", "lips"};
+  for (int i = 0; i < 2; ++i) {
+    dict::DiphoneUnit p;
+    p.take = "s" + std::to_string(i);
+    p.index = 3 + i;
+    p.phone1 = i == 0 ? "_" : "ʃ";
+    p.phone2 = "ɑ̃";
+    p.phone1_start_s = 1.0 + i;
+    p.phone1_end_s = 1.1 + i;
+    p.phone2_start_s = 1.1 + i;
+    p.phone2_end_s = 1.3 + i;
+    p.start_s = 1.05 + i;
+    p.end_s = 1.2 + i;
+    p.first_frame = 126 + 120 * i;
+    p.rate_hz = 120;
+    p.audio_path = "s" + std::to_string(i) + ".wav";
+    p.face_params.resize(3 + i, 2);
+    for (int r = 0; r < 3 + i; ++r) p.face_params.row(r) << 0.5 * r + i, -0.25 * r;
+    d.diphones.push_back(p);
+  }
   return d;
 }
 
@@ -81,6 +101,25 @@ TEST(DictionaryFile, RoundTrip) {
     EXPECT_EQ(b.hand_params, a.hand_params);
     EXPECT_EQ(b.forearm_in_head, a.forearm_in_head);
     EXPECT_EQ(b.head_pose, a.head_pose);
+  }
+  ASSERT_EQ(r.diphones.size(), 2u);
+  EXPECT_EQ(r.face_parameter_names, d.face_parameter_names);
+  for (size_t i = 0; i < 2; ++i) {
+    const dict::DiphoneUnit &a = d.diphones[i], &b = r.diphones[i];
+    EXPECT_EQ(b.take, a.take);
+    EXPECT_EQ(b.index, a.index);
+    EXPECT_EQ(b.phone1, a.phone1);  // UTF-8 kept
+    EXPECT_EQ(b.phone2, a.phone2);
+    EXPECT_EQ(b.phone1_start_s, a.phone1_start_s);
+    EXPECT_EQ(b.phone1_end_s, a.phone1_end_s);
+    EXPECT_EQ(b.phone2_start_s, a.phone2_start_s);
+    EXPECT_EQ(b.phone2_end_s, a.phone2_end_s);
+    EXPECT_EQ(b.start_s, a.start_s);
+    EXPECT_EQ(b.end_s, a.end_s);
+    EXPECT_EQ(b.first_frame, a.first_frame);
+    EXPECT_EQ(b.rate_hz, a.rate_hz);
+    EXPECT_EQ(b.audio_path, a.audio_path);
+    EXPECT_EQ(b.face_params, a.face_params);
   }
   // Saved again over itself: a dictionary file may be replaced.
   EXPECT_NO_THROW(SaveDictionaryFile(path, r));
@@ -179,6 +218,18 @@ TEST(DictionaryFile, TheDocumentedLayoutReadWithTheHdf5CApiAlone) {
   EXPECT_EQ(DatasetShape(f, "/coverage/placement_counts"), (std::vector<hsize_t>{6, 6}));
   EXPECT_EQ(DatasetShape(f, "/coverage/shape_counts"), (std::vector<hsize_t>{9, 9}));
   EXPECT_EQ(DatasetShape(f, "/coverage/successions"), std::vector<hsize_t>{3});
+  // Diphones: per unit [2], face parameters [3 + 4 = 7][2].
+  EXPECT_EQ(IntAttr(H5Gopen2(f, "/diphones", H5P_DEFAULT), "count"), 2);
+  for (const char* name :
+       {"/diphones/take", "/diphones/phone1", "/diphones/phone2", "/diphones/audio_path", "/diphones/phone_index",
+        "/diphones/first_frame", "/diphones/offset", "/diphones/frames", "/diphones/phone1_start_s",
+        "/diphones/phone1_end_s", "/diphones/phone2_start_s", "/diphones/phone2_end_s", "/diphones/start_s",
+        "/diphones/end_s", "/diphones/duration_s", "/diphones/rate_hz", "/diphones/face_parameter_names"}) {
+    EXPECT_EQ(DatasetShape(f, name), std::vector<hsize_t>{2}) << name;
+  }
+  EXPECT_EQ(DatasetShape(f, "/diphones/face_params"), (std::vector<hsize_t>{7, 2}));
+  EXPECT_EQ(ReadAll<int64_t>(f, "/diphones/offset", H5T_NATIVE_INT64, 2), (std::vector<int64_t>{0, 3}));
+  EXPECT_EQ(DatasetShape(f, "/coverage/diphones"), std::vector<hsize_t>{2});
   const std::vector<int64_t> pc = ReadAll<int64_t>(f, "/coverage/placement_counts", H5T_NATIVE_INT64, 36);
   EXPECT_EQ(pc[0 * 6 + 5], 1);  // 0 → 5
   EXPECT_EQ(pc[2 * 6 + 5], 1);  // 2 → 5

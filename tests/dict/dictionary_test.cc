@@ -161,6 +161,46 @@ TEST(Dikeys, BadSeriesGiveOneClearError) {
   EXPECT_THROW(ExtractDikeys(s), InvalidInput);
 }
 
+TEST(Diphones, MiddleToMiddleWithFaceParameters) {
+  TakeSeries s = Series();
+  s.face_params.resize(100, 1);
+  for (int f = 0; f < 100; ++f) s.face_params(f, 0) = 2.0 * f;
+  s.phones = {{0.0, 0.2, "_"}, {0.2, 0.3, "p"}, {0.3, 0.5, "a"}, {0.5, 0.99, "_"}};
+  s.audio_path = "t.wav";
+  ExtractionStats stats;
+  const std::vector<DiphoneUnit> u = ExtractDiphones(s, {}, &stats);
+  ASSERT_EQ(u.size(), 3u);
+  EXPECT_EQ(stats.kept, 3);
+  // _+p: 0.10 → 0.25 s, frames 10..25 (llround(25.0) = 25).
+  EXPECT_EQ(u[0].phone1, "_");
+  EXPECT_EQ(u[0].phone2, "p");
+  EXPECT_DOUBLE_EQ(u[0].start_s, 0.10);
+  EXPECT_DOUBLE_EQ(u[0].end_s, 0.25);
+  EXPECT_EQ(u[0].first_frame, 10);
+  EXPECT_EQ(u[0].frames(), 16);
+  EXPECT_DOUBLE_EQ(u[0].face_params(0, 0), 20.0);
+  EXPECT_EQ(u[1].phone1 + "+" + u[1].phone2, "p+a");
+  EXPECT_DOUBLE_EQ(u[1].phone1_start_s, 0.2);
+  EXPECT_DOUBLE_EQ(u[1].phone2_end_s, 0.5);
+  EXPECT_EQ(u[1].first_frame, 25);
+  EXPECT_EQ(u[1].frames(), 16);  // 0.25 → 0.40
+  EXPECT_EQ(u[2].audio_path, "t.wav");
+  const std::vector<std::pair<std::string, int>> want = {{"_+p", 1}, {"a+_", 1}, {"p+a", 1}};
+  EXPECT_EQ(DiphoneCoverage(u), want);
+  // An unsolved face frame inside p+a leaves it out.
+  s.face_params(30, 0) = kNaN;
+  EXPECT_EQ(ExtractDiphones(s, {}, &stats).size(), 2u);
+  // Overlapping phones are an error naming the take and the phone.
+  s.phones[2].start_s = 0.25;
+  try {
+    ExtractDiphones(s);
+    FAIL();
+  } catch (const InvalidInput& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "take 't': phone 3 ('a') overlaps the previous one, is out of order or has a bad time");
+  }
+}
+
 TEST(Coverage, CountsSuccessionsOfPlacementsShapesAndKeys) {
   const std::vector<DikeyUnit> u = ExtractDikeys(Series());
   const Coverage c = CoverageOfUnits(u);

@@ -665,7 +665,7 @@ class DictCommand : public Command {
                   "Takes, comma-separated names or glob patterns; default every take but fill versions");
     b->add_option("--tier", options_.tier, "Key tier: keys_aligned (csw keys score) or keys (labels)")
         ->capture_default_str();
-    b->add_option("--phones", options_.phones, "Phone tier for the per-dikey phasing (\"\" = none)")
+    b->add_option("--phones", options_.phones, "Phone tier for the per-dikey phasing and the diphones (\"\" = none)")
         ->capture_default_str();
     b->add_option("--max-unsolved", options_.dikeys.max_unsolved_fraction,
                   "Leave out a dikey with more than this fraction of unsolved frames")

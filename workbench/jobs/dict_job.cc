@@ -47,7 +47,25 @@ struct TakeWork {
   bool phasing = false;  // syllable onsets found
   std::vector<dict::DikeyUnit> units;
   dict::ExtractionStats stats;
+  std::vector<dict::DiphoneUnit> diphones;
+  dict::ExtractionStats diphone_stats;
 };
+
+// The phones of the phone tier (IPA, pauses "_"), on the range's clock: those
+// entirely within [offset, last].
+std::vector<Label> RangePhones(const Take& take, const std::string& phones, double offset, double last,
+                               const std::string& where) {
+  if (phones.empty()) return {};
+  const LabelTier* tier = FindTier(take.tiers, phones);
+  if (!tier || tier->kind != LabelTier::Kind::kInterval) return {};
+  const MappedPhones mapped = MapPhoneTier(*tier, PhoneSymbols::kAuto, where + ": tier '" + phones + "'");
+  std::vector<Label> out;
+  for (const Phone& p : mapped.phones) {
+    if (p.start_s < offset - 1e-9 || p.end_s > last + 1e-9) continue;
+    out.push_back({p.start_s - offset, p.end_s - offset, p.ipa.empty() ? "_" : p.ipa});
+  }
+  return out;
+}
 
 std::vector<std::string> ModelNames(const std::vector<std::string>& a, const std::vector<std::string>& b,
                                     const std::vector<std::string>& c = {}) {
@@ -169,6 +187,8 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
       if (!onsets.empty()) w->series.syllable_onset_s.push_back(onsets[k] - offset);
     }
     w->phasing = !onsets.empty();
+    w->series.phones = RangePhones(take, options.phones, offset, last, where);
+    w->series.audio_path = take.audio_path;
     work.push_back(std::move(w));
   }
 
@@ -179,7 +199,9 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
     w.series.hand_params = std::move(h.params);
     w.series.forearm_pose = std::move(h.pose);
     w.series.head_pose = std::move(f.pose);
+    w.series.face_params = std::move(f.params);
     w.units = dict::ExtractDikeys(w.series, options.dikeys, &w.stats);
+    w.diphones = dict::ExtractDiphones(w.series, options.dikeys, &w.diphone_stats);
     w.face_input = MarkerArray();
     w.hand_input = MarkerArray();
   });
@@ -191,6 +213,13 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
   d.keys_file = options.keys;
   d.key_tier = options.tier;
   for (int p = 0; p < hand.num_parameters(); ++p) d.hand_parameter_names.push_back("hand_p" + std::to_string(p + 1));
+  d.face_parameter_names = face.shape.parameter_names;
+  if (static_cast<int>(d.face_parameter_names.size()) != face.num_parameters()) {
+    d.face_parameter_names.clear();
+    for (int p = 0; p < face.num_parameters(); ++p) d.face_parameter_names.push_back("face_p" + std::to_string(p + 1));
+  }
+  dict::ExtractionStats diphone_total;
+  int64_t diphone_frames = 0;
   json takes = json::array();
   dict::ExtractionStats total;
   std::vector<std::vector<KeyMark>> key_lists;
@@ -204,7 +233,17 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
                      {"dikeys", w.stats.kept},
                      {"rejected_unsolved", w.stats.rejected_unsolved},
                      {"rejected_outside", w.stats.rejected_outside},
-                     {"phasing", w.phasing}});
+                     {"phasing", w.phasing},
+                     {"phones", w.series.phones.size()},
+                     {"diphones", w.diphone_stats.kept}});
+    diphone_total.successions += w.diphone_stats.successions;
+    diphone_total.kept += w.diphone_stats.kept;
+    diphone_total.rejected_unsolved += w.diphone_stats.rejected_unsolved;
+    diphone_total.rejected_outside += w.diphone_stats.rejected_outside;
+    for (dict::DiphoneUnit& u : w.diphones) {
+      diphone_frames += u.frames();
+      d.diphones.push_back(std::move(u));
+    }
     total.successions += w.stats.successions;
     total.kept += w.stats.kept;
     total.rejected_unsolved += w.stats.rejected_unsolved;
@@ -238,6 +277,15 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
                  {"rejected_unsolved", total.rejected_unsolved},
                  {"rejected_outside", total.rejected_outside},
                  {"frames", frames}};
+  json diphones = json::object();
+  for (const auto& [code, n] : dict::DiphoneCoverage(d.diphones)) diphones[code] = n;
+  r["diphones"] = {{"successions", diphone_total.successions},
+                   {"kept", diphone_total.kept},
+                   {"rejected_unsolved", diphone_total.rejected_unsolved},
+                   {"rejected_outside", diphone_total.rejected_outside},
+                   {"frames", diphone_frames},
+                   {"distinct", diphones.size()},
+                   {"coverage", diphones}};
   r["coverage"] = {{"corpus", CoverageJson(in_corpus)},
                    {"dictionary", CoverageJson(in_dict)},
                    {"complete", missing.empty()},
@@ -268,6 +316,12 @@ std::string DictBuildText(const json& r) {
     o << "; missing:";
     for (const json& m : c["missing_dikeys"]) o << " " << m.get<std::string>();
     o << "\n";
+  }
+  if (r.contains("diphones")) {
+    const json& p = r["diphones"];
+    o << "diphones: " << p["kept"].get<int>() << " of " << p["successions"].get<int>() << " phone successions ("
+      << p["rejected_unsolved"].get<int>() << " left out for unsolved frames), " << p["distinct"].get<int>()
+      << " distinct, " << p["frames"].get<int64_t>() << " frames\n";
   }
   return o.str();
 }

@@ -9,7 +9,10 @@
 //      head frame and head pose per frame; units with an unsolved frame are
 //      left out (counted); with a phone tier whose cued keys (LfPC, as `csw
 //      cue`) have the key tier's codes, each unit's phasing relative to its
-//      arriving key's syllable.
+//      arriving key's syllable;
+//   4. with the phone tier, one diphone per succession of phones (pauses
+//      included), middle to middle, with the face model's parameters per frame
+//      and a reference to the audio segment.
 // Writes DICT.h5 (io/dictionary) with the models' fingerprint, and reports the
 // coverage of the corpus's key successions: present, missing, candidates each.
 #include <nlohmann/json.hpp>
@@ -29,7 +32,7 @@ struct DictBuildOptions {
   std::string output;              // dictionary file (replaced)
   std::vector<std::string> takes;  // take selection; empty = every take but fill versions
   std::string tier = "keys_aligned";
-  std::string phones = "phones";  // phone tier for the phasing ("" = none)
+  std::string phones = "phones";  // phone tier for the phasing and the diphones ("" = none)
   dict::DikeyOptions dikeys;
   InversionOptions inversion;
   int threads = 0;  // takes inverted in parallel (0 = hardware threads)
@@ -39,6 +42,7 @@ struct DictBuildOptions {
 // {"corpus", "models", "keys", "output", "tier", "models_fingerprint",
 //  "takes": [{"take", "frames", "keys", "dikeys", "rejected_unsolved", "rejected_outside", "phasing"}],
 //  "dikeys": {"successions", "kept", "rejected_unsolved", "rejected_outside", "frames"},
+//  "diphones": {the same, "distinct", "coverage": {"p1+p2": candidates}},
 //  "coverage": {"corpus": COVERAGE, "dictionary": COVERAGE, "complete": bool,
 //               "missing_dikeys": ["PS-PS", ...]}}
 // with COVERAGE = CoverageJson.
