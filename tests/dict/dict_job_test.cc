@@ -123,6 +123,7 @@ class DictJob : public ::testing::Test {
 DictFixture* DictJob::fixture_ = nullptr;
 
 TEST_F(DictJob, HoldsExactlyTheCorpusKeySuccessions) {
+  ASSERT_NE(fixture_, nullptr);
   DictFixture& fx = *fixture_;
   DictBuildOptions o;
   o.corpus = fx.corpus;
@@ -237,6 +238,7 @@ TEST_F(DictJob, ForearmPoseRelativeToTheHeadRepeatsPerKey) {
   // move the forearm cluster (~250 mm from the fingertip) by at most
   // 7.5 + 250 · tan(5°) ≈ 29.4 mm from the key's mean pose; 35 mm allows
   // for the inversion's error.
+  ASSERT_NE(fixture_, nullptr);
   DictFixture& fx = *fixture_;
   DictBuildOptions o;
   o.corpus = fx.corpus;
@@ -274,6 +276,7 @@ TEST_F(DictJob, ForearmPoseRelativeToTheHeadRepeatsPerKey) {
 }
 
 TEST_F(DictJob, BadInputGivesOneClearError) {
+  ASSERT_NE(fixture_, nullptr);
   DictFixture& fx = *fixture_;
   Progress progress;
   DictBuildOptions o;
