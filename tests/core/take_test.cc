@@ -63,6 +63,9 @@ TEST(Sha256, KnownAnswer) {
   // FIPS 180-2 test vector for "abc".
   EXPECT_EQ(Sha256OfFile(path.string()), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
   EXPECT_THROW(Sha256OfFile((dir / "none").string()), IoError);
+  // The same digest of the bytes in memory; the empty input's known digest.
+  EXPECT_EQ(Sha256OfBytes("abc", 3), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(Sha256OfBytes(nullptr, 0), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
 }
 
 }  // namespace

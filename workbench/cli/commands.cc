@@ -8,6 +8,7 @@
 #include "workbench/jobs/clean_job.h"
 #include "workbench/jobs/coartic_generate_job.h"
 #include "workbench/jobs/cue_job.h"
+#include "workbench/jobs/dict_job.h"
 #include "workbench/jobs/jobs.h"
 #include "workbench/jobs/keys_job.h"
 #include "workbench/jobs/keys_suggest_job.h"
@@ -647,6 +648,48 @@ class PhasingCommand : public Command {
   bool json_ = false;
 };
 
+class DictCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("dict", "Unit dictionaries of the synthesizer (docs/dictionary-format.md)");
+    sub_->require_subcommand(1);
+    CLI::App* b = sub_->add_subcommand(
+        "build",
+        "The dikey dictionary: every movement between two successive keys (rest 00 included), with hand-shape "
+        "parameters, forearm pose relative to the head and head pose per frame, and its coverage report");
+    b->add_option("corpus", options_.corpus, "Corpus file")->required();
+    b->add_option("--models", options_.models, "Model file with a face and a hand model (csw fit)")->required();
+    b->add_option("--keys", options_.keys, "Key model file (csw keys train), recorded in the dictionary");
+    b->add_option("-o,--output", options_.output, "Dictionary file (HDF5, replaced)")->required();
+    b->add_option("--takes", options_.takes,
+                  "Takes, comma-separated names or glob patterns; default every take but fill versions");
+    b->add_option("--tier", options_.tier, "Key tier: keys_aligned (csw keys score) or keys (labels)")
+        ->capture_default_str();
+    b->add_option("--phones", options_.phones, "Phone tier for the per-dikey phasing and the diphones (\"\" = none)")
+        ->capture_default_str();
+    b->add_option("--max-unsolved", options_.dikeys.max_unsolved_fraction,
+                  "Leave out a dikey with more than this fraction of unsolved frames")
+        ->capture_default_str();
+    b->add_option("--threads", options_.threads, "Takes inverted in parallel (0 = hardware threads)")
+        ->capture_default_str();
+    b->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::DictBuild(options_, progress);
+    if (json_) {
+      PrintJson(r);
+    } else {
+      std::cout << jobs::DictBuildText(r);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::DictBuildOptions options_;
+  bool json_ = false;
+};
+
 class CoarticCommand : public Command {
  public:
   void Register(CLI::App& app) override {
@@ -881,6 +924,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<KeysCommand>());
   c.push_back(std::make_unique<PhasingCommand>());
   c.push_back(std::make_unique<CoarticCommand>());
+  c.push_back(std::make_unique<DictCommand>());
   c.push_back(std::make_unique<TransitionsCommand>());
   c.push_back(std::make_unique<SignSequenceCommand>());
   c.push_back(std::make_unique<PackCommand>());
