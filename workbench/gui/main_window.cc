@@ -21,6 +21,7 @@
 #include <QSettings>
 #include <QStatusBar>
 #include <QToolButton>
+#include <QUndoStack>
 #include <QVBoxLayout>
 #include <cmath>
 
@@ -28,6 +29,8 @@
 #include "workbench/gui/corpus_browser.h"
 #include "workbench/gui/figure_export.h"
 #include "workbench/gui/import_runner.h"
+#include "workbench/gui/label_lane.h"
+#include "workbench/gui/label_session.h"
 #include "workbench/gui/log_panel.h"
 #include "workbench/gui/marker_view.h"
 #include "workbench/gui/playback.h"
@@ -72,20 +75,32 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   quantity_combo_->setCurrentIndex(2);
   auto* show_all = new QToolButton(plots_box);
   show_all->setText(tr("Show all"));
+  label_tier_combo_ = new QComboBox(plots_box);
+  label_tier_combo_->setObjectName("labelTierCombo");
+  label_tier_combo_->setEditable(true);
+  label_tier_combo_->setMinimumContentsLength(12);
+  label_tier_combo_->addItem(QStringLiteral("keys"));
+  label_tier_combo_->setToolTip(tr("The point tier of key targets the label lane edits (a new name makes a new tier)"));
   bar->addWidget(new QLabel(tr("Marker:"), plots_box));
   bar->addWidget(marker_combo_);
   bar->addWidget(quantity_combo_);
   bar->addStretch(1);
+  bar->addWidget(new QLabel(tr("Key tier:"), plots_box));
+  bar->addWidget(label_tier_combo_);
   bar->addWidget(show_all);
   plots_layout->addLayout(bar);
   plots_ = new TimeSeriesPanel(plots_box);
   plots_layout->addWidget(plots_, 1);
+  log_ = new LogPanel(this);
+  labels_ = new LabelSession(log_, this);
+  label_lane_ = new LabelLane(labels_, plots_box);
+  label_lane_->AlignWith(plots_->plot());
+  plots_layout->addWidget(label_lane_);
   plots_dock_ = new QDockWidget(tr("Time series"), this);
   plots_dock_->setObjectName("plotsDock");
   plots_dock_->setWidget(plots_box);
   addDockWidget(Qt::BottomDockWidgetArea, plots_dock_);
 
-  log_ = new LogPanel(this);
   log_dock_ = new QDockWidget(tr("Log"), this);
   log_dock_->setObjectName("logDock");
   log_dock_->setWidget(log_);
@@ -107,6 +122,13 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   connect(marker_combo_, qOverload<int>(&QComboBox::activated), this, [this](int) { OnMarkerSeriesChosen(); });
   connect(quantity_combo_, qOverload<int>(&QComboBox::activated), this, [this](int) { OnMarkerSeriesChosen(); });
   connect(show_all, &QToolButton::clicked, plots_, &TimeSeriesPanel::ShowAll);
+  connect(plots_, &TimeSeriesPanel::TimeRangeChanged, label_lane_, &LabelLane::SetTimeRange);
+  connect(label_lane_, &LabelLane::SeekRequested, playback_, &Playback::Seek);
+  connect(label_tier_combo_, qOverload<int>(&QComboBox::activated), this,
+          [this](int) { SetLabelTier(label_tier_combo_->currentText()); });
+  connect(labels_, &LabelSession::Saved, this, [this](const QString& take, double ms) {
+    statusBar()->showMessage(tr("Labels of %1 saved (%2 ms)").arg(take).arg(ms, 0, 'f', 0), 3000);
+  });
 
   connect(import_runner_, &ImportRunner::ProgressChanged, this, [this](const QString& stage, double fraction) {
     if (import_progress_ == nullptr) return;
@@ -164,6 +186,16 @@ void MainWindow::BuildMenus() {
   file->addSeparator();
   file->addAction(tr("&Quit"), QKeySequence::Quit, this, &QWidget::close);
   UpdateRecentMenu();
+
+  QMenu* edit = menuBar()->addMenu(tr("&Edit"));
+  undo_action_ = labels_->undo_stack()->createUndoAction(this, tr("&Undo"));
+  undo_action_->setShortcuts({QKeySequence(Qt::CTRL | Qt::Key_Z)});
+  redo_action_ = labels_->undo_stack()->createRedoAction(this, tr("&Redo"));
+  redo_action_->setShortcuts({QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence(Qt::CTRL | Qt::Key_Y)});
+  edit->addAction(undo_action_);
+  edit->addAction(redo_action_);
+  edit->addSeparator();
+  edit->addAction(tr("&Label Lane"), QKeySequence(Qt::CTRL | Qt::Key_L), this, [this] { label_lane_->setFocus(); });
 
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(takes_dock_->toggleViewAction());
@@ -265,6 +297,8 @@ bool MainWindow::OpenCorpus(const QString& path) {
     std::vector<TakeSummary> takes = corpus.Takes();
     corpus_ = corpus;
     take_.reset();
+    labels_->ForgetSaved();
+    labels_->SetTake(std::string(), nullptr, label_tier_combo_->currentText().toStdString());
     marker_view_->SetTake(nullptr);
     plots_->SetTake(nullptr);
     playback_->SetTake(0, 0, nullptr);
@@ -287,7 +321,10 @@ bool MainWindow::SelectTake(const QString& name) {
   if (take_ && QString::fromStdString(take_->name) == name) return true;
   std::shared_ptr<const Take> take;
   try {
-    take = std::make_shared<const Take>(corpus_->LoadTake(name.toStdString()));
+    Take loaded = corpus_->LoadTake(name.toStdString());
+    // Labels this session saved (or is saving) are newer than what the open corpus holds.
+    if (auto tiers = labels_->KnownTiers(corpus_->path(), loaded.name)) loaded.tiers = std::move(*tiers);
+    take = std::make_shared<const Take>(std::move(loaded));
   } catch (const std::exception& e) {
     log_->Error(tr("Cannot load take %1: %2").arg(name, QString::fromStdString(e.what())));
     return false;
@@ -336,9 +373,29 @@ bool MainWindow::SelectTake(const QString& name) {
     browser_->SelectTake(name);
     browser_->blockSignals(false);
   }
+  SetLabelTier(label_tier_combo_->currentText());
   UpdateTitle();
   OnFrameChanged(playback_->frame());
   emit TakeShown(name);
+  return true;
+}
+
+bool MainWindow::SetLabelTier(const QString& tier) {
+  const QString name = tier.trimmed().isEmpty() ? QStringLiteral("keys") : tier.trimmed();
+  if (label_tier_combo_->currentText() != name) label_tier_combo_->setCurrentText(name);
+  if (!take_ || !corpus_) {
+    labels_->SetTake(std::string(), nullptr, name.toStdString());
+    return false;
+  }
+  try {
+    labels_->SetTake(corpus_->path(), take_, name.toStdString());
+  } catch (const std::exception& e) {
+    log_->Error(tr("Cannot label tier %1: %2").arg(name, QString::fromStdString(e.what())));
+    labels_->SetTake(std::string(), nullptr, name.toStdString());
+    return false;
+  }
+  label_lane_->SetTimeRange(plots_->view_start(), plots_->view_end());
+  label_lane_->SetCursorFrame(playback_->frame());
   return true;
 }
 
@@ -366,6 +423,7 @@ bool MainWindow::LoadMarkerSetFile(const QString& path) {
 
 void MainWindow::OnFrameChanged(qint64 frame) {
   marker_view_->SetFrame(frame);
+  label_lane_->SetCursorFrame(frame);
   if (take_ && take_->rate_hz > 0) {
     double t = static_cast<double>(frame) / take_->rate_hz;
     plots_->SetCursorTime(t);

@@ -1,0 +1,274 @@
+// The key-label lane driven from the keyboard through the real window,
+// offscreen: targets set, moved, relabelled, deleted and jumped between; undo
+// and redo on the window's QUndoStack; autosave to the corpus on a worker
+// thread, checked by reopening the corpus; an edit made while the test holds
+// the corpus's writer lock is kept and saved once the lock is released. Every
+// check compares with the frames and codes typed (100 Hz take: frame f is at
+// f / 100 s).
+#include "workbench/gui/label_lane.h"
+
+#include <gtest/gtest.h>
+
+#include <QApplication>
+#include <QSignalSpy>
+#include <QTest>
+#include <QUndoStack>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/file_util.h"
+#include "io/corpus/corpus.h"
+#include "tests/testing/testing.h"
+#include "workbench/gui/label_session.h"
+#include "workbench/gui/log_panel.h"
+#include "workbench/gui/main_window.h"
+#include "workbench/gui/playback.h"
+
+namespace csw::gui {
+namespace {
+
+constexpr double kRate = 100.0;
+constexpr int kFrames = 50;
+constexpr int kAutosaveMs = 300;  // the tests shorten the default few seconds
+constexpr int kWaitMs = 10000;    // upper bound for a save on a loaded test machine
+
+Take MakeTake() {
+  Take t;
+  t.name = "alpha";
+  t.rate_hz = kRate;
+  t.marker_names = {"m0", "m1"};
+  t.markers.Resize(kFrames, 2);
+  for (int f = 0; f < kFrames; ++f) {
+    for (int k = 0; k < 2; ++k) {
+      float* p = t.markers.at(f, k);
+      p[0] = static_cast<float>(f);
+      p[1] = static_cast<float>(10 * k);
+      p[2] = 5.0f;
+    }
+  }
+  t.tiers = {LabelTier{"words", LabelTier::Kind::kInterval, 0.0, 0.5, {{0.0, 0.2, "bonjour"}, {0.2, 0.5, "papa"}}}};
+  return t;
+}
+
+// (frame, code) of every label of `tier` of take alpha as stored in the corpus;
+// the times must fall exactly on frames.
+std::vector<std::pair<int, std::string>> StoredLabels(const std::string& corpus, const std::string& tier) {
+  std::vector<std::pair<int, std::string>> out;
+  const Take take = Corpus::Open(corpus).LoadTake("alpha");
+  for (const LabelTier& t : take.tiers) {
+    if (t.name != tier) continue;
+    EXPECT_EQ(t.kind, LabelTier::Kind::kPoint);
+    for (const Label& l : t.labels) {
+      const double f = l.start_s * kRate;
+      EXPECT_NEAR(f, std::round(f), 1e-9) << "label not on a frame: " << l.start_s;
+      out.emplace_back(static_cast<int>(std::lround(f)), l.text);
+    }
+  }
+  return out;
+}
+
+std::vector<std::pair<int, std::string>> ModelLabels(const LabelSession& s) {
+  std::vector<std::pair<int, std::string>> out;
+  for (size_t i = 0; i < s.model()->size(); ++i)
+    out.emplace_back(static_cast<int>(s.TimeFrame(s.model()->at(i).start_s)), s.model()->at(i).text);
+  return out;
+}
+
+using Labels = std::vector<std::pair<int, std::string>>;
+
+class LabelLaneTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    corpus_ = (dir_ / "corpus.h5").string();
+    CorpusTransaction tx(corpus_);
+    tx.WriteTake(MakeTake());
+    tx.Commit();
+  }
+
+  std::unique_ptr<MainWindow> OpenWindow(const std::string& tier) {
+    auto w = std::make_unique<MainWindow>(QString::fromStdString((dir_ / "settings.ini").string()));
+    w->playback()->SetAudioEnabled(false);
+    w->resize(1200, 800);
+    w->show();
+    QApplication::setActiveWindow(w.get());
+    EXPECT_TRUE(QTest::qWaitForWindowActive(w.get()));
+    EXPECT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+    EXPECT_TRUE(w->SelectTake("alpha"));
+    EXPECT_TRUE(w->SetLabelTier(QString::fromStdString(tier)));
+    w->labels()->SetAutosaveDelay(kAutosaveMs);
+    w->labels()->SetRetryDelay(100);
+    w->label_lane()->setFocus();
+    EXPECT_TRUE(QTest::qWaitFor([&] { return w->label_lane()->hasFocus(); }, 2000));
+    return w;
+  }
+
+  // Types a two-digit code into the lane.
+  static void Type(MainWindow& w, const char* code) {
+    QTest::keyClick(w.label_lane(), static_cast<Qt::Key>(Qt::Key_0 + (code[0] - '0')));
+    QTest::keyClick(w.label_lane(), static_cast<Qt::Key>(Qt::Key_0 + (code[1] - '0')));
+  }
+  static void Key(MainWindow& w, Qt::Key key, Qt::KeyboardModifiers mods = Qt::NoModifier) {
+    QTest::keyClick(w.label_lane(), key, mods);
+  }
+
+  testing::TempDir dir_;
+  std::string corpus_;
+};
+
+TEST_F(LabelLaneTest, FiveTargetsFromKeyboardUndoTwoRedoOneAutosaveAndReopenFindFour) {
+  auto w = OpenWindow("my_keys");
+  LabelSession& s = *w->labels();
+  ASSERT_TRUE(s.has_take());
+  EXPECT_EQ(s.model()->size(), 0u);  // a new tier
+
+  // Frames reached with the window's playback keys (Shift+Right = 10 frames).
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 10
+  EXPECT_EQ(w->playback()->frame(), 10);
+  Type(*w, "13");
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 20
+  Key(*w, Qt::Key_Right);
+  Key(*w, Qt::Key_Right);  // 22
+  Type(*w, "25");
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 32
+  Type(*w, "41");
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);
+  Key(*w, Qt::Key_Left);  // 41
+  Type(*w, "00");
+  Key(*w, Qt::Key_End);  // 49, the last frame
+  Type(*w, "58");
+  EXPECT_EQ(ModelLabels(s), (Labels{{10, "13"}, {22, "25"}, {32, "41"}, {41, "00"}, {49, "58"}}));
+  EXPECT_EQ(s.undo_stack()->count(), 5);
+
+  Key(*w, Qt::Key_Z, Qt::ControlModifier);
+  Key(*w, Qt::Key_Z, Qt::ControlModifier);
+  EXPECT_EQ(ModelLabels(s), (Labels{{10, "13"}, {22, "25"}, {32, "41"}}));
+  Key(*w, Qt::Key_Z, Qt::ControlModifier | Qt::ShiftModifier);
+  const Labels four{{10, "13"}, {22, "25"}, {32, "41"}, {41, "00"}};
+  EXPECT_EQ(ModelLabels(s), four);
+  EXPECT_EQ(s.undo_stack()->index(), 4);
+
+  // Nothing is saved before the autosave delay; then it is, without a user action.
+  EXPECT_TRUE(s.HasUnsavedEdits());
+  QSignalSpy saved(&s, &LabelSession::Saved);
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !s.HasUnsavedEdits(); }, kWaitMs));
+  EXPECT_GE(saved.count(), 1);
+  EXPECT_EQ(StoredLabels(corpus_, "my_keys"), four);
+  // The take's other tier is kept as it was.
+  const Take stored = Corpus::Open(corpus_).LoadTake("alpha");
+  ASSERT_EQ(stored.tiers.size(), 2u);
+  EXPECT_EQ(stored.tiers[0].name, "words");
+  ASSERT_EQ(stored.tiers[0].labels.size(), 2u);
+  EXPECT_EQ(stored.tiers[0].labels[1].text, "papa");
+
+  // Reopened in a new window, the lane shows the four labels.
+  w.reset();
+  auto again = OpenWindow("my_keys");
+  EXPECT_EQ(ModelLabels(*again->labels()), four);
+  EXPECT_EQ(again->labels()->undo_stack()->count(), 0);
+  EXPECT_EQ(again->log()->CountLevel(LogPanel::Level::kError), 0);
+}
+
+TEST_F(LabelLaneTest, MoveRelabelDeleteAndJumpFromTheKeyboard) {
+  auto w = OpenWindow("keys");
+  LabelSession& s = *w->labels();
+  Key(*w, Qt::Key_Home);
+  for (int i = 0; i < 5; ++i) Key(*w, Qt::Key_Right);  // 5
+  Type(*w, "21");
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 15
+  Type(*w, "32");
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 25
+  Type(*w, "43");
+  EXPECT_EQ(ModelLabels(s), (Labels{{5, "21"}, {15, "32"}, {25, "43"}}));
+
+  // Jumps: previous twice from 25 lands on 5; next lands on 15; next past the last stays.
+  Key(*w, Qt::Key_Left, Qt::ControlModifier);
+  EXPECT_EQ(w->playback()->frame(), 15);
+  Key(*w, Qt::Key_Left, Qt::ControlModifier);
+  EXPECT_EQ(w->playback()->frame(), 5);
+  Key(*w, Qt::Key_Left, Qt::ControlModifier);
+  EXPECT_EQ(w->playback()->frame(), 5);
+  Key(*w, Qt::Key_Right, Qt::ControlModifier);
+  EXPECT_EQ(w->playback()->frame(), 15);
+  EXPECT_EQ(w->label_lane()->selected(), 1);
+
+  // Alt+Right three times, Alt+Left once: 15 -> 17, the cursor follows.
+  Key(*w, Qt::Key_Right, Qt::AltModifier);
+  Key(*w, Qt::Key_Right, Qt::AltModifier);
+  Key(*w, Qt::Key_Right, Qt::AltModifier);
+  Key(*w, Qt::Key_Left, Qt::AltModifier);
+  EXPECT_EQ(w->playback()->frame(), 17);
+  EXPECT_EQ(ModelLabels(s), (Labels{{5, "21"}, {17, "32"}, {25, "43"}}));
+
+  // Two digits on a labelled frame relabel it; a bad code (shape 9) is refused.
+  Type(*w, "35");
+  EXPECT_EQ(ModelLabels(s), (Labels{{5, "21"}, {17, "35"}, {25, "43"}}));
+  const int errors = w->log()->CountLevel(LogPanel::Level::kError);
+  const int commands = s.undo_stack()->count();
+  Type(*w, "69");
+  EXPECT_EQ(ModelLabels(s), (Labels{{5, "21"}, {17, "35"}, {25, "43"}}));
+  EXPECT_EQ(w->log()->CountLevel(LogPanel::Level::kError), errors + 1);
+  EXPECT_EQ(s.undo_stack()->count(), commands);
+  // Esc forgets a first digit.
+  QTest::keyClick(w->label_lane(), Qt::Key_4);
+  EXPECT_EQ(w->label_lane()->pending_digit(), "4");
+  Key(*w, Qt::Key_Escape);
+  EXPECT_EQ(w->label_lane()->pending_digit(), "");
+
+  // Delete on the cursor frame; on an empty frame nothing happens.
+  Key(*w, Qt::Key_Delete);
+  EXPECT_EQ(ModelLabels(s), (Labels{{5, "21"}, {25, "43"}}));
+  Key(*w, Qt::Key_Delete);
+  EXPECT_EQ(ModelLabels(s), (Labels{{5, "21"}, {25, "43"}}));
+
+  // Undo back through delete, relabel and the four moves: the label is at 15 as "32" again.
+  for (int i = 0; i < 6; ++i) Key(*w, Qt::Key_Z, Qt::ControlModifier);
+  EXPECT_EQ(ModelLabels(s), (Labels{{5, "21"}, {15, "32"}, {25, "43"}}));
+  EXPECT_EQ(s.undo_stack()->undoText(), "add key 43 at 0.250 s");
+  // Ctrl+Y redoes too.
+  Key(*w, Qt::Key_Y, Qt::ControlModifier);
+  EXPECT_EQ(ModelLabels(s), (Labels{{5, "21"}, {16, "32"}, {25, "43"}}));
+}
+
+TEST_F(LabelLaneTest, LabelsSurviveReopenAndAnEditMadeUnderAnotherWritersLockIsSavedAfterIt) {
+  {
+    auto w = OpenWindow("keys");
+    Key(*w, Qt::Key_Home);
+    for (int i = 0; i < 5; ++i) Key(*w, Qt::Key_Right);
+    Type(*w, "12");
+    ASSERT_TRUE(QTest::qWaitFor([&] { return !w->labels()->HasUnsavedEdits(); }, kWaitMs));
+  }
+  EXPECT_EQ(StoredLabels(corpus_, "keys"), (Labels{{5, "12"}}));
+
+  auto w = OpenWindow("keys");
+  LabelSession& s = *w->labels();
+  EXPECT_EQ(ModelLabels(s), (Labels{{5, "12"}}));  // survived the reopen
+
+  // Another writer (here the test) holds the corpus's one-writer lock.
+  auto lock = std::make_unique<WriterLock>(corpus_, "corpus");
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 20
+  Type(*w, "34");
+  EXPECT_EQ(ModelLabels(s), (Labels{{5, "12"}, {20, "34"}}));
+  LogPanel& log = *w->log();
+  ASSERT_TRUE(QTest::qWaitFor([&] { return log.CountLevel(LogPanel::Level::kWarning) >= 1; }, kWaitMs));
+  EXPECT_TRUE(log.entries().back().contains("another writer holds the corpus")) << log.entries().back().toStdString();
+  // Several retries later: still waiting, one warning only, the corpus unchanged.
+  QTest::qWait(600);
+  EXPECT_TRUE(s.HasUnsavedEdits());
+  EXPECT_EQ(log.CountLevel(LogPanel::Level::kWarning), 1);
+  EXPECT_EQ(StoredLabels(corpus_, "keys"), (Labels{{5, "12"}}));
+
+  lock.reset();  // the other writer is done
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !s.HasUnsavedEdits(); }, kWaitMs));
+  EXPECT_EQ(StoredLabels(corpus_, "keys"), (Labels{{5, "12"}, {20, "34"}}));
+  EXPECT_TRUE(log.entries().back().contains("saved now that the corpus is free")) << log.entries().back().toStdString();
+  EXPECT_EQ(log.CountLevel(LogPanel::Level::kError), 0);
+}
+
+}  // namespace
+}  // namespace csw::gui
