@@ -348,6 +348,7 @@ bool MainWindow::SelectTake(const QString& name) {
     log_->Warning(tr("Marker set not applied to %1: %2").arg(name, QString::fromStdString(e.what())));
     marker_view_->SetTake(take_, nullptr);
   }
+  plots_->SetHiddenTier(label_tier_combo_->currentText().trimmed());  // drawn by the label lane instead
   plots_->SetTake(take_);
   playback_->SetTake(take_->frames(), take_->rate_hz, &take_->audio);  // rewinds to frame 0
   marker_combo_->clear();
@@ -392,8 +393,10 @@ bool MainWindow::SetLabelTier(const QString& tier) {
   } catch (const std::exception& e) {
     log_->Error(tr("Cannot label tier %1: %2").arg(name, QString::fromStdString(e.what())));
     labels_->SetTake(std::string(), nullptr, name.toStdString());
+    plots_->SetHiddenTier(QString());
     return false;
   }
+  plots_->SetHiddenTier(name);
   label_lane_->SetTimeRange(plots_->view_start(), plots_->view_end());
   label_lane_->SetCursorFrame(playback_->frame());
   return true;

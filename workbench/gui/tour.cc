@@ -15,6 +15,8 @@
 #include "workbench/gui/corpus_browser.h"
 #include "workbench/gui/demo_take.h"
 #include "workbench/gui/import_runner.h"
+#include "workbench/gui/label_lane.h"
+#include "workbench/gui/label_session.h"
 #include "workbench/gui/log_panel.h"
 #include "workbench/gui/main_window.h"
 #include "workbench/gui/marker_view.h"
@@ -107,6 +109,19 @@ QStringList RunTour(const TourOptions& options) {
   window.plots()->SetTimeRange(key_s - 0.75, key_s + 0.75);
   window.plots()->SetCursorTime(key_s);
   written << Shot(window.plots_dock(), options.out_dir, "02-plots-zoomed.png");
+
+  // 4b. The key-label lane under the plots, on the demo take's `keys` tier: the
+  // cursor on the key target nearest that placement target (selected, orange),
+  // reached with the lane's Ctrl+Right / Ctrl+Left jumps.
+  if (!window.SetLabelTier(QStringLiteral("keys")) || window.labels()->model()->size() == 0)
+    throw Error("tour: the demo take's keys tier cannot be labelled");
+  {
+    const LabelModel& model = *window.labels()->model();
+    const long near = model.Find(key_s, 1.0);
+    if (near >= 0) window.playback()->Seek(window.labels()->TimeFrame(model.at(static_cast<size_t>(near)).start_s));
+  }
+  window.label_lane()->setFocus();
+  written << Shot(window.plots_dock(), options.out_dir, "label-lane.png");
 
   // 5. The 3D view alone, orbited: face, throat, forearm and hand markers with their sticks.
   window.marker_view()->Orbit(-60, 10);
