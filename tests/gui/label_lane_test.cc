@@ -274,6 +274,29 @@ TEST_F(LabelLaneTest, LabelsSurviveReopenAndAnEditMadeUnderAnotherWritersLockIsS
   EXPECT_EQ(log.CountLevel(LogPanel::Level::kError), 0);
 }
 
+// Play and mark: two digits typed while the take plays set a target at the
+// frame playing when the second digit is pressed. Closing the window with an
+// edit not yet saved waits for the save, then closes.
+TEST_F(LabelLaneTest, DigitsTypedWhilePlayingMarkThePlayingFrameAndClosingSavesFirst) {
+  auto w = OpenWindow("keys");
+  w->labels()->SetAutosaveDelay(60000);  // only the close saves
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_Space);  // play (the window's shortcut)
+  ASSERT_TRUE(w->playback()->playing());
+  ASSERT_TRUE(QTest::qWaitFor([&] { return w->playback()->frame() >= 10; }, kWaitMs));
+  Type(*w, "23");
+  const int frame = static_cast<int>(w->playback()->frame());  // no event loop ran between the digits and here
+  EXPECT_GE(frame, 10);
+  EXPECT_EQ(ModelLabels(*w->labels()), (Labels{{frame, "23"}}));
+  Key(*w, Qt::Key_Space);  // pause
+  EXPECT_EQ(StoredLabels(corpus_, "keys"), Labels{});
+
+  EXPECT_FALSE(w->close());  // waits for the save
+  EXPECT_TRUE(w->isVisible());
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !w->isVisible(); }, kWaitMs));
+  EXPECT_EQ(StoredLabels(corpus_, "keys"), (Labels{{frame, "23"}}));
+}
+
 QStringList PlotTierLanes(const TimeSeriesPanel& plots) {
   QStringList names;
   for (int lane = 0; lane < plots.lane_count(); ++lane) {

@@ -3,6 +3,7 @@
 #include <QUndoCommand>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include "core/error.h"
 #include "io/corpus/corpus.h"
@@ -64,6 +65,14 @@ void TierSaver::Run() {
       const std::string what = e.what();
       const bool locked = what.find("is writing this corpus") != std::string::npos;
       emit Failed(corpus, take, job.generation, QString::fromStdString(what), locked);
+      bool stopping = false;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stopping = stop_;
+      }
+      // On exit nobody listens any more: say it where the user can still see it.
+      if (stopping)
+        std::fprintf(stderr, "csw-workbench: labels of take %s not saved: %s\n", job.take.c_str(), e.what());
     }
     std::lock_guard<std::mutex> lock(mutex_);
     running_job_ = false;

@@ -24,6 +24,7 @@
 #include <QUndoStack>
 #include <QVBoxLayout>
 #include <cmath>
+#include <cstdio>
 
 #include "core/error.h"
 #include "workbench/gui/corpus_browser.h"
@@ -255,6 +256,24 @@ void MainWindow::SaveLayout() {
 
 void MainWindow::closeEvent(QCloseEvent* event) {
   playback_->Pause();
+  // Unsaved labels are saved first; the window closes when they are written. A
+  // second close while they still wait (another writer holds the corpus) closes
+  // anyway, after saying so in the log and on stderr.
+  if (labels_->HasUnsavedEdits() && !close_requested_) {
+    close_requested_ = true;
+    labels_->SaveNow();
+    log_->Info(tr("Saving labels before closing…"));
+    connect(labels_, &LabelSession::Saved, this, [this] {
+      if (close_requested_ && !labels_->HasUnsavedEdits()) close();
+    });
+    event->ignore();
+    return;
+  }
+  if (labels_->HasUnsavedEdits()) {
+    const QString m = tr("Closing with label edits not yet saved to %1 (retried once more on exit)").arg(corpus_path());
+    log_->Warning(m);
+    std::fprintf(stderr, "csw-workbench: %s\n", qPrintable(m));
+  }
   import_runner_->Cancel();
   SaveLayout();
   event->accept();

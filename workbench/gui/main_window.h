@@ -125,6 +125,7 @@ class MainWindow : public QMainWindow {
   QMenu* recent_menu_ = nullptr;
   QLabel* frame_label_ = nullptr;
   QAction* play_action_ = nullptr;
+  bool close_requested_ = false;
 };
 
 }  // namespace csw::gui

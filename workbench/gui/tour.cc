@@ -110,9 +110,15 @@ QStringList RunTour(const TourOptions& options) {
   window.plots()->SetCursorTime(key_s);
   written << Shot(window.plots_dock(), options.out_dir, "02-plots-zoomed.png");
 
-  // 4b. The key-label lane under the plots, on the demo take's `keys` tier: the
-  // cursor on the key target nearest that placement target (selected, orange),
-  // reached with the lane's Ctrl+Right / Ctrl+Left jumps.
+  // 5. The 3D view alone, orbited: face, throat, forearm and hand markers with their sticks.
+  window.marker_view()->Orbit(-60, 10);
+  window.marker_view()->Zoom(1.25);
+  window.marker_view()->Pan(0, 110);
+  written << Shot(window.marker_view(), options.out_dir, "03-3d-view.png");
+
+  // 5b. The key-label lane under the plots, on the demo take's `keys` tier: the
+  // cursor put on the key target nearest that placement target (the selected
+  // label, orange), as the lane's Ctrl+Right / Ctrl+Left jumps would.
   if (!window.SetLabelTier(QStringLiteral("keys")) || window.labels()->model()->size() == 0)
     throw Error("tour: the demo take's keys tier cannot be labelled");
   {
@@ -122,12 +128,6 @@ QStringList RunTour(const TourOptions& options) {
   }
   window.label_lane()->setFocus();
   written << Shot(window.plots_dock(), options.out_dir, "label-lane.png");
-
-  // 5. The 3D view alone, orbited: face, throat, forearm and hand markers with their sticks.
-  window.marker_view()->Orbit(-60, 10);
-  window.marker_view()->Zoom(1.25);
-  window.marker_view()->Pan(0, 110);
-  written << Shot(window.marker_view(), options.out_dir, "03-3d-view.png");
 
   // 6. The imported captures: the demo corpus's first take, then a real face capture.
   if (!options.markerset.isEmpty()) window.LoadMarkerSetFile(options.markerset);
