@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include <QApplication>
+#include <QComboBox>
+#include <QLineEdit>
 #include <QSignalSpy>
 #include <QTest>
 #include <QUndoStack>
@@ -44,13 +46,17 @@ Take MakeTake() {
   t.rate_hz = kRate;
   t.marker_names = {"m0", "m1"};
   t.markers.Resize(kFrames, 2);
+  // m0 moves at a constant speed (no speed minimum); m1 swings along x with a
+  // 20-frame period, so its speed (central differences) is zero at every 10th frame.
   for (int f = 0; f < kFrames; ++f) {
-    for (int k = 0; k < 2; ++k) {
-      float* p = t.markers.at(f, k);
-      p[0] = static_cast<float>(f);
-      p[1] = static_cast<float>(10 * k);
-      p[2] = 5.0f;
-    }
+    float* p = t.markers.at(f, 0);
+    p[0] = static_cast<float>(f);
+    p[1] = 0.0f;
+    p[2] = 5.0f;
+    p = t.markers.at(f, 1);
+    p[0] = static_cast<float>(100.0 * std::cos(2.0 * M_PI * f / 20.0));
+    p[1] = 10.0f;
+    p[2] = 5.0f;
   }
   t.tiers = {LabelTier{"words", LabelTier::Kind::kInterval, 0.0, 0.5, {{0.0, 0.2, "bonjour"}, {0.2, 0.5, "papa"}}}};
   return t;
@@ -81,6 +87,14 @@ std::vector<std::pair<int, std::string>> ModelLabels(const LabelSession& s) {
 }
 
 using Labels = std::vector<std::pair<int, std::string>>;
+
+QStringList PlotTierLanes(const TimeSeriesPanel& plots) {
+  QStringList names;
+  for (int lane = 0; lane < plots.lane_count(); ++lane) {
+    if (plots.lane_kind(lane) == TimeSeriesPanel::LaneKind::kTier) names << plots.lane_name(lane);
+  }
+  return names;
+}
 
 class LabelLaneTest : public ::testing::Test {
  protected:
@@ -297,12 +311,110 @@ TEST_F(LabelLaneTest, DigitsTypedWhilePlayingMarkThePlayingFrameAndClosingSavesF
   EXPECT_EQ(StoredLabels(corpus_, "keys"), (Labels{{frame, "23"}}));
 }
 
-QStringList PlotTierLanes(const TimeSeriesPanel& plots) {
-  QStringList names;
-  for (int lane = 0; lane < plots.lane_count(); ++lane) {
-    if (plots.lane_kind(lane) == TimeSeriesPanel::LaneKind::kTier) names << plots.lane_name(lane);
-  }
-  return names;
+// A new tier typed into the Key tier box (Enter) starts an empty tier; the
+// pending edits of the previous tier are saved at the switch, not lost.
+TEST_F(LabelLaneTest, ANewTierTypedInTheTierBoxSavesThePreviousTiersEditsFirst) {
+  auto w = OpenWindow("keys");
+  w->labels()->SetAutosaveDelay(60000);  // only the switch saves
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);
+  Type(*w, "51");
+  QComboBox* box = w->label_tier_combo();
+  box->setFocus();
+  box->lineEdit()->selectAll();
+  QTest::keyClicks(box->lineEdit(), "second");
+  QTest::keyClick(box->lineEdit(), Qt::Key_Return);
+  EXPECT_EQ(w->labels()->tier_name(), "second");
+  EXPECT_EQ(w->labels()->model()->size(), 0u);
+  EXPECT_EQ(w->labels()->undo_stack()->count(), 0);
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !w->labels()->HasUnsavedEdits(); }, kWaitMs));
+  EXPECT_EQ(StoredLabels(corpus_, "keys"), (Labels{{10, "51"}}));
+  // The plots now draw keys, with its new label.
+  EXPECT_TRUE(PlotTierLanes(*w->plots()).contains("keys"));
+  EXPECT_FALSE(PlotTierLanes(*w->plots()).contains("second"));
+  ASSERT_EQ(w->take()->tiers.size(), 2u);
+  EXPECT_EQ(w->take()->tiers[1].name, "keys");
+  EXPECT_EQ(w->take()->tiers[1].labels.size(), 1u);
+
+  // A label on the second tier, then back to keys: its label is there, and an
+  // edit of keys keeps the second tier's label in the corpus.
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 20
+  w->label_lane()->setFocus();
+  Type(*w, "02");
+  ASSERT_TRUE(w->SetLabelTier("keys"));
+  EXPECT_EQ(ModelLabels(*w->labels()), (Labels{{10, "51"}}));
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 30
+  Type(*w, "03");
+  w->labels()->SaveNow();
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !w->labels()->HasUnsavedEdits(); }, kWaitMs));
+  EXPECT_EQ(StoredLabels(corpus_, "keys"), (Labels{{10, "51"}, {30, "03"}}));
+  EXPECT_EQ(StoredLabels(corpus_, "second"), (Labels{{20, "02"}}));
+  const Take stored = Corpus::Open(corpus_).LoadTake("alpha");
+  ASSERT_EQ(stored.tiers.size(), 3u);
+  EXPECT_EQ(stored.tiers[0].name, "words");
+  EXPECT_EQ(stored.tiers[0].labels.size(), 2u);
+}
+
+TEST(NearestSpeedMinimum, FindsTheNearestLocalMinimumWithinTheWindow) {
+  // |sin| sampled 20 frames a period: minima (zeros) at 0, 10, 20, 30.
+  std::vector<float> speed;
+  for (int f = 0; f < 35; ++f) speed.push_back(static_cast<float>(std::abs(std::sin(2.0 * M_PI * f / 20.0))));
+  EXPECT_EQ(NearestSpeedMinimum(speed, 13, 5), 10);
+  EXPECT_EQ(NearestSpeedMinimum(speed, 16, 5), 20);
+  EXPECT_EQ(NearestSpeedMinimum(speed, 15, 5), 10);  // a tie goes to the earlier one
+  EXPECT_EQ(NearestSpeedMinimum(speed, 20, 5), 20);
+  EXPECT_EQ(NearestSpeedMinimum(speed, 15, 4), -1);  // none within 4 frames
+  // A flat minimum stands at its middle; missing frames are skipped.
+  const float nan = std::nanf("");
+  EXPECT_EQ(NearestSpeedMinimum({5, 3, 1, 1, 1, 3, 5}, 0, 10), 3);
+  EXPECT_EQ(NearestSpeedMinimum({5, 4, 3, nan, nan, 9}, 4, 10), 2);
+  // A constant speed has no minimum.
+  EXPECT_EQ(NearestSpeedMinimum({2, 2, 2, 2}, 1, 10), -1);
+}
+
+// S snaps the label on the cursor frame to the nearest speed minimum of the
+// marker lane's marker (m1: zero speed at every 10th frame), within 0.25 s.
+TEST_F(LabelLaneTest, SSnapsTheLabelToTheNearestSpeedMinimumOfTheMarkerLane) {
+  auto w = OpenWindow("keys");
+  LabelSession& s = *w->labels();
+  w->plots()->SetMarkerSeries(1, MarkerQuantity::kSpeed);
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);
+  for (int i = 0; i < 3; ++i) Key(*w, Qt::Key_Right);  // 13
+  Type(*w, "12");
+  Key(*w, Qt::Key_S);
+  EXPECT_EQ(w->playback()->frame(), 10);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 40
+  Key(*w, Qt::Key_Left);
+  Key(*w, Qt::Key_Left);
+  Key(*w, Qt::Key_Left);
+  Key(*w, Qt::Key_Left);  // 36
+  Type(*w, "34");
+  Key(*w, Qt::Key_S);
+  EXPECT_EQ(w->playback()->frame(), 40);
+  EXPECT_EQ(ModelLabels(s), (Labels{{10, "12"}, {40, "34"}}));
+  // Already on a minimum: nothing to do.
+  const int commands = s.undo_stack()->count();
+  Key(*w, Qt::Key_S);
+  EXPECT_EQ(s.undo_stack()->count(), commands);
+  // m0's constant speed has no minimum; without a marker lane there is nothing to snap to.
+  Key(*w, Qt::Key_Left);
+  Type(*w, "45");  // a label at 39
+  w->plots()->SetMarkerSeries(0, MarkerQuantity::kSpeed);
+  Key(*w, Qt::Key_S);
+  w->plots()->SetMarkerSeries(-1, MarkerQuantity::kSpeed);
+  const int warnings = w->log()->CountLevel(LogPanel::Level::kWarning);
+  Key(*w, Qt::Key_S);
+  EXPECT_EQ(w->log()->CountLevel(LogPanel::Level::kWarning), warnings + 1);
+  EXPECT_EQ(ModelLabels(s), (Labels{{10, "12"}, {39, "45"}, {40, "34"}}));
+  // A snap is one undoable move.
+  Key(*w, Qt::Key_Delete);
+  Key(*w, Qt::Key_Z, Qt::ControlModifier);
+  Key(*w, Qt::Key_Z, Qt::ControlModifier);
+  Key(*w, Qt::Key_Z, Qt::ControlModifier);
+  EXPECT_EQ(ModelLabels(s), (Labels{{10, "12"}, {36, "34"}}));
 }
 
 // The demo corpus's take (the virtual cuer's first sentence): its `keys` tier

@@ -148,6 +148,10 @@ bool LabelLane::HandleKey(int key, Qt::KeyboardModifiers mods, const QString& /*
     }
     return true;
   }
+  if (key == Qt::Key_S && mods == Qt::NoModifier) {
+    emit SnapRequested();
+    return true;
+  }
   if (key == Qt::Key_Escape && mods == Qt::NoModifier) {
     pending_.clear();
     return true;

@@ -9,6 +9,8 @@
 //   Alt+Left / Alt+Right move the label on the cursor frame by one frame
 //   Delete / Backspace   delete the label on the cursor frame
 //   Ctrl+Right / Ctrl+Left  jump to the next / previous label
+//   S                    snap the label on the cursor frame to the nearest
+//                        speed minimum of the marker lane's marker (SnapRequested)
 //   click                move the cursor there (onto a label within 6 px)
 // Undo / redo are the window's Ctrl+Z / Ctrl+Shift+Z (the session's QUndoStack).
 #include <QWidget>
@@ -45,6 +47,8 @@ class LabelLane : public QWidget {
  signals:
   // The lane asks the playback to put the cursor on `frame`.
   void SeekRequested(qint64 frame);
+  // S was pressed: the window snaps the label on the cursor frame.
+  void SnapRequested();
 
  protected:
   void paintEvent(QPaintEvent* event) override;

@@ -4,12 +4,43 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "core/error.h"
 #include "io/corpus/corpus.h"
 #include "workbench/gui/log_panel.h"
 
 namespace csw::gui {
+
+int64_t NearestSpeedMinimum(const std::vector<float>& speed, int64_t frame, int64_t max_distance) {
+  const auto n = static_cast<int64_t>(speed.size());
+  auto ok = [&](int64_t i) { return i >= 0 && i < n && std::isfinite(speed[static_cast<size_t>(i)]); };
+  auto v = [&](int64_t i) { return speed[static_cast<size_t>(i)]; };
+  int64_t best = -1;
+  int64_t best_distance = max_distance + 1;
+  for (int64_t i = 0; i < n;) {
+    if (!ok(i)) {
+      ++i;
+      continue;
+    }
+    // A run of equal finite values [i, j).
+    int64_t j = i + 1;
+    while (ok(j) && v(j) == v(i)) ++j;
+    const bool left_higher = !ok(i - 1) || v(i - 1) > v(i);
+    const bool right_higher = !ok(j) || v(j) > v(i);
+    const bool has_neighbour = ok(i - 1) || ok(j);  // so every neighbour there is, is higher
+    if (left_higher && right_higher && has_neighbour) {
+      const int64_t at = i + (j - 1 - i) / 2;
+      const int64_t distance = std::abs(at - frame);
+      if (distance < best_distance) {
+        best_distance = distance;
+        best = at;
+      }
+    }
+    i = j;
+  }
+  return best;
+}
 
 // ---------------------------------------------------------------------------
 // TierSaver
@@ -152,10 +183,13 @@ void LabelSession::SetTake(const std::string& corpus, std::shared_ptr<const Take
     StartNextSave();
   }
   std::unique_ptr<LabelModel> model;
+  std::vector<LabelTier> base;
   if (take) {
+    // The tiers this session wrote last win over the (older) loaded ones.
+    base = KnownTiers(corpus, take->name).value_or(take->tiers);
     const std::string where = corpus + ": take '" + take->name + "'";
     LabelTier tier{tier_name, LabelTier::Kind::kPoint, 0.0, take->duration_s(), {}};
-    for (const LabelTier& t : take->tiers) {
+    for (const LabelTier& t : base) {
       if (t.name != tier_name) continue;
       if (t.kind != LabelTier::Kind::kPoint) {
         throw InvalidInput(where + ": tier '" + tier_name + "' is an interval tier; key targets go on a point tier");
@@ -171,6 +205,7 @@ void LabelSession::SetTake(const std::string& corpus, std::shared_ptr<const Take
   stack_->clear();
   stack_->blockSignals(false);
   model_ = std::move(model);
+  base_tiers_ = std::move(base);
   take_ = take;
   corpus_ = take ? corpus : std::string();
   take_name_ = take ? take->name : std::string();
@@ -261,7 +296,7 @@ void LabelSession::OnChanged() {
 
 void LabelSession::Snapshot() {
   if (!model_ || !take_) return;
-  std::vector<LabelTier> tiers = take_->tiers;
+  std::vector<LabelTier> tiers = base_tiers_;
   bool replaced = false;
   for (LabelTier& t : tiers) {
     if (t.name == tier_name_) {

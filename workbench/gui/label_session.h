@@ -29,6 +29,14 @@ namespace csw::gui {
 
 class LogPanel;
 
+// The frame of the local minimum of `speed` (one value per frame, NaN =
+// missing) nearest to `frame` within max_distance frames, the earlier one on a
+// tie; -1 when there is none. A local minimum is a finite value no larger than
+// its finite neighbours and smaller than at least one of them (the ends of the
+// take and of a gap count with their one neighbour); in a flat run the run's middle frame
+// stands for it.
+int64_t NearestSpeedMinimum(const std::vector<float>& speed, int64_t frame, int64_t max_distance);
+
 // Writes a take's label tiers into a corpus on one worker thread, one job at
 // a time, in order. Results come back as queued calls on the GUI thread.
 class TierSaver : public QObject {
@@ -76,8 +84,10 @@ class LabelSession : public QObject {
   // lock is still held by someone else.
   ~LabelSession() override;
 
-  // Starts labelling `tier_name` of `take` (stored in `corpus`). An existing
-  // point tier of that name is edited; a missing one is created empty over
+  // Starts labelling `tier_name` of `take` (stored in `corpus`), after taking a
+  // snapshot of the pending edits of the tier labelled so far. The take's tiers
+  // are those this session last wrote for it (KnownTiers) when there are any,
+  // else take->tiers. An existing point tier of that name is edited; a missing one is created empty over
   // [0, take duration]. The undo history starts empty. Throws InvalidInput
   // when the tier exists but is an interval tier or holds a bad key code.
   // `take` may be null (nothing to label).
@@ -142,6 +152,7 @@ class LabelSession : public QObject {
   QUndoStack* stack_;
   std::unique_ptr<LabelModel> model_;
   std::shared_ptr<const Take> take_;
+  std::vector<LabelTier> base_tiers_;  // the take's tiers the model's tier goes into
   std::string corpus_;
   std::string take_name_;
   std::string tier_name_;

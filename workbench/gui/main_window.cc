@@ -125,6 +125,7 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   connect(show_all, &QToolButton::clicked, plots_, &TimeSeriesPanel::ShowAll);
   connect(plots_, &TimeSeriesPanel::TimeRangeChanged, label_lane_, &LabelLane::SetTimeRange);
   connect(label_lane_, &LabelLane::SeekRequested, playback_, &Playback::Seek);
+  connect(label_lane_, &LabelLane::SnapRequested, this, [this] { SnapLabelToSpeedMinimum(); });
   connect(label_tier_combo_, qOverload<int>(&QComboBox::activated), this,
           [this](int) { SetLabelTier(label_tier_combo_->currentText()); });
   connect(labels_, &LabelSession::Saved, this, [this](const QString& take, double ms) {
@@ -416,8 +417,52 @@ bool MainWindow::SetLabelTier(const QString& tier) {
     return false;
   }
   plots_->SetHiddenTier(name);
+  // The plots show the tiers as this session last wrote them (e.g. the tier
+  // just left, with its edits), not as they were loaded.
+  if (auto known = labels_->KnownTiers(corpus_->path(), take_->name)) {
+    auto copy = std::make_shared<Take>(*take_);
+    copy->tiers = std::move(*known);
+    take_ = copy;
+    const double t0 = plots_->view_start(), t1 = plots_->view_end();
+    const int marker = plots_->marker();
+    const MarkerQuantity quantity = plots_->quantity();
+    plots_->SetTake(take_);
+    plots_->SetMarkerSeries(marker, quantity);
+    plots_->SetTimeRange(t0, t1);
+    plots_->SetCursorTime(playback_->time_s());
+  }
   label_lane_->SetTimeRange(plots_->view_start(), plots_->view_end());
   label_lane_->SetCursorFrame(playback_->frame());
+  return true;
+}
+
+bool MainWindow::SnapLabelToSpeedMinimum() {
+  if (!take_ || !labels_->has_take()) return false;
+  const int64_t frame = playback_->frame();
+  const long index = labels_->LabelAtFrame(frame);
+  if (index < 0) {
+    log_->Info(tr("Snap: no label on frame %1").arg(frame + take_->first_frame));
+    return false;
+  }
+  const int marker = plots_->marker();
+  if (marker < 0) {
+    log_->Warning(tr("Snap: choose the marker whose speed minima labels snap to (Marker, above the plots)"));
+    return false;
+  }
+  const std::vector<float> speed = MarkerSeries(*take_, marker, MarkerQuantity::kSpeed);
+  const auto window = std::max<int64_t>(1, std::llround(kSnapWindowS * take_->rate_hz));
+  const int64_t to = NearestSpeedMinimum(speed, frame, window);
+  const QString name = QString::fromStdString(take_->marker_names[static_cast<size_t>(marker)]);
+  if (to < 0) {
+    log_->Info(tr("Snap: %1's speed has no minimum within %2 s of frame %3")
+                   .arg(name)
+                   .arg(kSnapWindowS)
+                   .arg(frame + take_->first_frame));
+    return false;
+  }
+  if (to == frame) return true;
+  if (!labels_->MoveLabel(index, to)) return false;
+  playback_->Seek(to);
   return true;
 }
 

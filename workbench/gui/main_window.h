@@ -54,6 +54,11 @@ class MainWindow : public QMainWindow {
   // none) of the shown take in the key-label lane; false (and a log line) when
   // the take's tier of that name cannot be labelled.
   bool SetLabelTier(const QString& tier);
+  // Moves the label on the cursor frame to the nearest speed minimum of the
+  // marker lane's marker within kSnapWindowS (key S in the label lane); false
+  // (and a log line) when there is no label there, no marker lane or no minimum.
+  static constexpr double kSnapWindowS = 0.25;
+  bool SnapLabelToSpeedMinimum();
 
   QString corpus_path() const;
   std::shared_ptr<const Take> take() const { return take_; }
