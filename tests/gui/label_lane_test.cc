@@ -355,6 +355,40 @@ TEST_F(LabelLaneTest, ANewTierTypedInTheTierBoxSavesThePreviousTiersEditsFirst) 
   EXPECT_EQ(stored.tiers[0].labels.size(), 2u);
 }
 
+// Autosave writes only the tiers edited in the window: a tier another writer
+// (here the test, as a CLI command would) stored meanwhile stays in the corpus.
+TEST_F(LabelLaneTest, ATierAnotherWriterStoredMeanwhileIsKeptByTheNextAutosave) {
+  auto w = OpenWindow("keys");
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 10
+  Type(*w, "14");
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !w->labels()->HasUnsavedEdits(); }, kWaitMs));
+  {
+    CorpusTransaction tx(corpus_);
+    std::vector<LabelTier> tiers = Corpus::Open(corpus_).LoadTake("alpha").tiers;
+    tiers.push_back({"decoded_keys", LabelTier::Kind::kPoint, 0.0, 0.5, {{0.3, 0.3, "22"}}});
+    tx.WriteTiers("alpha", tiers);
+    tx.Commit();
+  }
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 20
+  Type(*w, "15");
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !w->labels()->HasUnsavedEdits(); }, kWaitMs));
+  EXPECT_EQ(StoredLabels(corpus_, "keys"), (Labels{{10, "14"}, {20, "15"}}));
+  EXPECT_EQ(StoredLabels(corpus_, "decoded_keys"), (Labels{{30, "22"}}));
+  const std::vector<LabelTier> tiers = Corpus::Open(corpus_).LoadTiers("alpha");
+  ASSERT_EQ(tiers.size(), 3u);
+  EXPECT_EQ(tiers[0].name, "words");
+  EXPECT_EQ(tiers[1].name, "keys");
+  EXPECT_EQ(tiers[2].name, "decoded_keys");
+  // LoadTiers reads what LoadTake reads.
+  const Take take = Corpus::Open(corpus_).LoadTake("alpha");
+  ASSERT_EQ(take.tiers.size(), tiers.size());
+  for (size_t i = 0; i < tiers.size(); ++i) {
+    EXPECT_EQ(take.tiers[i].name, tiers[i].name);
+    EXPECT_EQ(take.tiers[i].labels.size(), tiers[i].labels.size());
+  }
+}
+
 TEST(NearestSpeedMinimum, FindsTheNearestLocalMinimumWithinTheWindow) {
   // |sin| sampled 20 frames a period: minima (zeros) at 0, 10, 20, 30.
   std::vector<float> speed;

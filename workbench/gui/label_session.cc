@@ -1,6 +1,7 @@
 #include "workbench/gui/label_session.h"
 
 #include <QUndoCommand>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -86,8 +87,17 @@ void TierSaver::Run() {
     const QString take = QString::fromStdString(job.take);
     const auto start = std::chrono::steady_clock::now();
     try {
-      CorpusTransaction tx(job.corpus);
-      tx.WriteTiers(job.take, job.tiers);
+      CorpusTransaction tx(job.corpus);                                             // takes the writer lock
+      std::vector<LabelTier> tiers = Corpus::Open(job.corpus).LoadTiers(job.take);  // as stored now
+      for (LabelTier& edited : job.tiers) {
+        auto it = std::find_if(tiers.begin(), tiers.end(), [&](const LabelTier& t) { return t.name == edited.name; });
+        if (it != tiers.end()) {
+          *it = std::move(edited);
+        } else {
+          tiers.push_back(std::move(edited));
+        }
+      }
+      tx.WriteTiers(job.take, tiers);
       tx.Commit();
       const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
       emit Saved(corpus, take, job.generation, ms);
@@ -146,6 +156,12 @@ class LabelSession::Command : public QUndoCommand {
   bool first_ = true;
 };
 
+std::vector<LabelTier> LabelSession::EditedTiers(const Snap& snap) {
+  std::vector<LabelTier> tiers;
+  for (const auto& [name, tier] : snap.edited) tiers.push_back(tier);
+  return tiers;
+}
+
 LabelSession::LabelSession(LogPanel* log, QObject* parent)
     : QObject(parent), log_(log), stack_(new QUndoStack(this)), saver_(std::make_unique<TierSaver>()) {
   autosave_timer_.setSingleShot(true);
@@ -170,7 +186,8 @@ LabelSession::~LabelSession() {
   }
   disconnect(saver_.get(), nullptr, this, nullptr);
   for (auto& [key, snap] : snaps_) {
-    if (snap.generation > snap.saved_generation) saver_->Post({key.first, key.second, snap.tiers, snap.generation});
+    if (snap.generation > snap.saved_generation)
+      saver_->Post({key.first, key.second, EditedTiers(snap), snap.generation});
   }
   saver_.reset();  // runs the queued jobs, then joins
 }
@@ -307,6 +324,7 @@ void LabelSession::Snapshot() {
   if (!replaced) tiers.push_back(model_->tier());
   Snap& snap = snaps_[{corpus_, take_name_}];
   snap.tiers = std::move(tiers);
+  snap.edited[tier_name_] = model_->tier();
   snap.generation = ++next_generation_;
 }
 
@@ -317,7 +335,7 @@ void LabelSession::StartNextSave() {
   for (auto& [key, snap] : snaps_) {
     if (snap.generation > snap.saved_generation) {
       snap.in_flight = true;
-      saver_->Post({key.first, key.second, snap.tiers, snap.generation});
+      saver_->Post({key.first, key.second, EditedTiers(snap), snap.generation});
       return;
     }
   }

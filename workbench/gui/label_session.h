@@ -4,7 +4,9 @@
 // (an edit, an undo, a redo) restarts a single-shot timer; when it fires, a
 // snapshot of the take's tiers is handed to a TierSaver, which commits it to
 // the corpus on its own thread (CorpusTransaction + WriteTiers: only that
-// take's tier file and a fresh index are written). The GUI thread never waits
+// take's tier file and a fresh index are written; the tiers edited replace
+// their namesakes among those stored, so tiers another writer stored meanwhile
+// are kept). The GUI thread never waits
 // on HDF5. When the corpus's writer lock is held by another writer the save
 // fails, a warning goes to the log once, and the newest snapshot is retried
 // until it is written: an edit is never dropped.
@@ -43,6 +45,9 @@ class TierSaver : public QObject {
   Q_OBJECT
 
  public:
+  // Replaces (or adds) `tiers` among the take's tiers as they are in the corpus
+  // when the writer lock is taken: tiers written meanwhile by someone else
+  // (e.g. a CLI command) are kept.
   struct Job {
     std::string corpus;
     std::string take;
@@ -162,12 +167,14 @@ class LabelSession : public QObject {
   // Per (corpus, take): the newest tiers this session produced, and whether
   // they still have to be written.
   struct Snap {
-    std::vector<LabelTier> tiers;
+    std::vector<LabelTier> tiers;             // all the take's tiers, as shown
+    std::map<std::string, LabelTier> edited;  // the tiers edited, by name: what a save writes
     long generation = 0;
     long saved_generation = 0;
     bool in_flight = false;
     bool deferred_logged = false;
   };
+  static std::vector<LabelTier> EditedTiers(const Snap& snap);
   std::map<std::pair<std::string, std::string>, Snap> snaps_;
   long next_generation_ = 0;
   QTimer autosave_timer_;
