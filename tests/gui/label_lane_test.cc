@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <QAction>
 #include <QApplication>
 #include <QComboBox>
 #include <QLineEdit>
@@ -319,6 +320,7 @@ TEST_F(LabelLaneTest, ANewTierTypedInTheTierBoxSavesThePreviousTiersEditsFirst) 
   Key(*w, Qt::Key_Home);
   Key(*w, Qt::Key_Right, Qt::ShiftModifier);
   Type(*w, "51");
+  EXPECT_TRUE(w->undo_action()->isEnabled());
   QComboBox* box = w->label_tier_combo();
   box->setFocus();
   box->lineEdit()->selectAll();
@@ -327,6 +329,7 @@ TEST_F(LabelLaneTest, ANewTierTypedInTheTierBoxSavesThePreviousTiersEditsFirst) 
   EXPECT_EQ(w->labels()->tier_name(), "second");
   EXPECT_EQ(w->labels()->model()->size(), 0u);
   EXPECT_EQ(w->labels()->undo_stack()->count(), 0);
+  EXPECT_FALSE(w->undo_action()->isEnabled());  // the history of the tier left is gone
   ASSERT_TRUE(QTest::qWaitFor([&] { return !w->labels()->HasUnsavedEdits(); }, kWaitMs));
   EXPECT_EQ(StoredLabels(corpus_, "keys"), (Labels{{10, "51"}}));
   // The plots now draw keys, with its new label.

@@ -218,9 +218,9 @@ void LabelSession::SetTake(const std::string& corpus, std::shared_ptr<const Take
     }
     model = std::make_unique<LabelModel>(std::move(tier), true, where);
   }
-  stack_->blockSignals(true);
+  clearing_ = true;  // the stack's signals still reach the Undo / Redo actions
   stack_->clear();
-  stack_->blockSignals(false);
+  clearing_ = false;
   model_ = std::move(model);
   base_tiers_ = std::move(base);
   take_ = take;
@@ -307,6 +307,7 @@ bool LabelSession::DeleteLabel(long index) {
 }
 
 void LabelSession::OnChanged() {
+  if (clearing_) return;
   if (model_) autosave_timer_.start();  // restarts: saves a few seconds after the last change
   emit LabelsChanged();
 }

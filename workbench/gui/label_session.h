@@ -163,6 +163,7 @@ class LabelSession : public QObject {
   std::string tier_name_;
   double rate_hz_ = 0.0;
   int64_t frames_ = 0;
+  bool clearing_ = false;
 
   // Per (corpus, take): the newest tiers this session produced, and whether
   // they still have to be written.
