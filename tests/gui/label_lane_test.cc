@@ -18,6 +18,7 @@
 #include <QUndoStack>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -27,6 +28,7 @@
 #include "io/corpus/corpus.h"
 #include "tests/testing/testing.h"
 #include "workbench/gui/demo_take.h"
+#include "workbench/gui/label_counts.h"
 #include "workbench/gui/label_session.h"
 #include "workbench/gui/log_panel.h"
 #include "workbench/gui/main_window.h"
@@ -160,6 +162,7 @@ TEST_F(LabelLaneTest, FiveTargetsFromKeyboardUndoTwoRedoOneAutosaveAndReopenFind
   Type(*w, "58");
   EXPECT_EQ(ModelLabels(s), (Labels{{10, "13"}, {22, "25"}, {32, "41"}, {41, "00"}, {49, "58"}}));
   EXPECT_EQ(s.undo_stack()->count(), 5);
+  EXPECT_EQ(w->label_counts()->total(), 5);
 
   Key(*w, Qt::Key_Z, Qt::ControlModifier);
   Key(*w, Qt::Key_Z, Qt::ControlModifier);
@@ -168,6 +171,10 @@ TEST_F(LabelLaneTest, FiveTargetsFromKeyboardUndoTwoRedoOneAutosaveAndReopenFind
   const Labels four{{10, "13"}, {22, "25"}, {32, "41"}, {41, "00"}};
   EXPECT_EQ(ModelLabels(s), four);
   EXPECT_EQ(s.undo_stack()->index(), 4);
+  // The counts panel follows: one of each code left, none of the undone 58.
+  EXPECT_EQ(w->label_counts()->total(), 4);
+  for (const char* code : {"13", "25", "41", "00"}) EXPECT_EQ(w->label_counts()->Count(code), 1) << code;
+  EXPECT_EQ(w->label_counts()->Count("58"), 0);
 
   // Nothing is saved before the autosave delay; then it is, without a user action.
   EXPECT_TRUE(s.HasUnsavedEdits());
@@ -491,6 +498,12 @@ TEST(LabelLaneDemo, TheVirtualCuersKeysTierOpensInTheLane) {
     EXPECT_EQ(s.model()->at(i).text, keys->labels[i].text) << i;
     EXPECT_DOUBLE_EQ(s.model()->at(i).start_s, keys->labels[i].start_s) << i;
   }
+  // The counts panel: as many rows as distinct codes (plus the total), each count as in the tier.
+  EXPECT_EQ(w.label_counts()->total(), static_cast<int>(keys->labels.size()));
+  std::map<std::string, int> expected;
+  for (const Label& l : keys->labels) ++expected[l.text];
+  EXPECT_EQ(w.label_counts()->rowCount(), static_cast<int>(expected.size()) + 1);
+  for (const auto& [code, n] : expected) EXPECT_EQ(w.label_counts()->Count(QString::fromStdString(code)), n) << code;
   QStringList lanes = PlotTierLanes(*w.plots());
   EXPECT_FALSE(lanes.contains("keys"));
   EXPECT_TRUE(lanes.contains("placement_targets"));

@@ -30,6 +30,7 @@
 #include "workbench/gui/corpus_browser.h"
 #include "workbench/gui/figure_export.h"
 #include "workbench/gui/import_runner.h"
+#include "workbench/gui/label_counts.h"
 #include "workbench/gui/label_lane.h"
 #include "workbench/gui/label_session.h"
 #include "workbench/gui/log_panel.h"
@@ -107,8 +108,17 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   log_dock_->setWidget(log_);
   addDockWidget(Qt::BottomDockWidgetArea, log_dock_);
   splitDockWidget(plots_dock_, log_dock_, Qt::Vertical);
+  label_counts_ = new LabelCountsPanel(this);
+  counts_dock_ = new QDockWidget(tr("Label counts"), this);
+  counts_dock_->setObjectName("countsDock");
+  counts_dock_->setWidget(label_counts_);
+  addDockWidget(Qt::LeftDockWidgetArea, counts_dock_);
+  splitDockWidget(takes_dock_, counts_dock_, Qt::Vertical);
+  connect(labels_, &LabelSession::LabelsChanged, this,
+          [this] { label_counts_->Refresh(labels_->has_take() ? labels_->model() : nullptr); });
   resizeDocks({plots_dock_, log_dock_}, {380, 90}, Qt::Vertical);
   resizeDocks({takes_dock_}, {430}, Qt::Horizontal);
+  resizeDocks({takes_dock_, counts_dock_}, {520, 180}, Qt::Vertical);
 
   playback_ = new Playback(this);
   import_runner_ = new ImportRunner(this);
@@ -203,6 +213,7 @@ void MainWindow::BuildMenus() {
   view->addAction(takes_dock_->toggleViewAction());
   view->addAction(plots_dock_->toggleViewAction());
   view->addAction(log_dock_->toggleViewAction());
+  view->addAction(counts_dock_->toggleViewAction());
   view->addSeparator();
   QAction* perspective = view->addAction(tr("&Perspective"));
   perspective->setCheckable(true);

@@ -23,6 +23,7 @@ namespace csw::gui {
 
 class CorpusBrowser;
 class ImportRunner;
+class LabelCountsPanel;
 class LabelLane;
 class LabelSession;
 class LogPanel;
@@ -76,6 +77,8 @@ class MainWindow : public QMainWindow {
   QComboBox* label_tier_combo() const { return label_tier_combo_; }
   LabelSession* labels() const { return labels_; }
   LabelLane* label_lane() const { return label_lane_; }
+  LabelCountsPanel* label_counts() const { return label_counts_; }
+  QDockWidget* counts_dock() const { return counts_dock_; }
   QAction* undo_action() const { return undo_action_; }
   QAction* redo_action() const { return redo_action_; }
   QDockWidget* takes_dock() const { return takes_dock_; }
@@ -122,6 +125,8 @@ class MainWindow : public QMainWindow {
   QComboBox* label_tier_combo_ = nullptr;
   LabelSession* labels_ = nullptr;
   LabelLane* label_lane_ = nullptr;
+  LabelCountsPanel* label_counts_ = nullptr;
+  QDockWidget* counts_dock_ = nullptr;
   QAction* undo_action_ = nullptr;
   QAction* redo_action_ = nullptr;
   QDockWidget* takes_dock_ = nullptr;
