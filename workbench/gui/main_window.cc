@@ -43,6 +43,23 @@ namespace csw::gui {
 namespace {
 constexpr int kMaxRecent = 8;
 const char* kFigureFilter = "PNG image (*.png);;SVG drawing (*.svg);;PDF document (*.pdf)";
+
+bool SameTiers(const std::vector<LabelTier>& a, const std::vector<LabelTier>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const LabelTier& x = a[i];
+    const LabelTier& y = b[i];
+    if (x.name != y.name || x.kind != y.kind || x.start_s != y.start_s || x.end_s != y.end_s ||
+        x.labels.size() != y.labels.size())
+      return false;
+    for (size_t k = 0; k < x.labels.size(); ++k) {
+      if (x.labels[k].start_s != y.labels[k].start_s || x.labels[k].end_s != y.labels[k].end_s ||
+          x.labels[k].text != y.labels[k].text)
+        return false;
+    }
+  }
+  return true;
+}
 }  // namespace
 
 MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWindow(parent) {
@@ -430,7 +447,7 @@ bool MainWindow::SetLabelTier(const QString& tier) {
   plots_->SetHiddenTier(name);
   // The plots show the tiers as this session last wrote them (e.g. the tier
   // just left, with its edits), not as they were loaded.
-  if (auto known = labels_->KnownTiers(corpus_->path(), take_->name)) {
+  if (auto known = labels_->KnownTiers(corpus_->path(), take_->name); known && !SameTiers(*known, take_->tiers)) {
     auto copy = std::make_shared<Take>(*take_);
     copy->tiers = std::move(*known);
     take_ = copy;
