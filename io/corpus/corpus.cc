@@ -1088,6 +1088,12 @@ std::string Corpus::TakeMarkerSet(const std::string& take) const {
   return h5::ReadAttrString(g.get(), "markerset", impl_->where, TakeObject(take)).value_or("");
 }
 
+std::vector<LabelTier> Corpus::LoadTiers(const std::string& take) const {
+  auto lock = h5::Lock();
+  Handle g = OpenTakeGroup(impl_->file.get(), take, impl_->where);
+  return ReadTiers(g.get(), impl_->where, TakeObject(take));
+}
+
 std::vector<std::string> Corpus::ScoreNames(const std::string& take) const {
   auto lock = h5::Lock();
   Handle g = OpenTakeGroup(impl_->file.get(), take, impl_->where);

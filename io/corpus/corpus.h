@@ -87,6 +87,9 @@ class Corpus {
   // Frames [first, first + count) of one take, for streaming reads; throws
   // InvalidInput when the range is not inside the take.
   MarkerArray LoadMarkers(const std::string& take, int64_t first, int64_t count) const;
+  // The label tiers of one take (LoadTake(take).tiers without reading its
+  // markers, audio or analog data). Throws InvalidInput when there is no such take.
+  std::vector<LabelTier> LoadTiers(const std::string& take) const;
   // The marker-set definition (JSON text) the take was imported with, "" when
   // none. Throws InvalidInput when there is no such take.
   std::string TakeMarkerSet(const std::string& take) const;

@@ -21,13 +21,18 @@
 #include <QSettings>
 #include <QStatusBar>
 #include <QToolButton>
+#include <QUndoStack>
 #include <QVBoxLayout>
 #include <cmath>
+#include <cstdio>
 
 #include "core/error.h"
 #include "workbench/gui/corpus_browser.h"
 #include "workbench/gui/figure_export.h"
 #include "workbench/gui/import_runner.h"
+#include "workbench/gui/label_counts.h"
+#include "workbench/gui/label_lane.h"
+#include "workbench/gui/label_session.h"
 #include "workbench/gui/log_panel.h"
 #include "workbench/gui/marker_view.h"
 #include "workbench/gui/playback.h"
@@ -38,6 +43,23 @@ namespace csw::gui {
 namespace {
 constexpr int kMaxRecent = 8;
 const char* kFigureFilter = "PNG image (*.png);;SVG drawing (*.svg);;PDF document (*.pdf)";
+
+bool SameTiers(const std::vector<LabelTier>& a, const std::vector<LabelTier>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const LabelTier& x = a[i];
+    const LabelTier& y = b[i];
+    if (x.name != y.name || x.kind != y.kind || x.start_s != y.start_s || x.end_s != y.end_s ||
+        x.labels.size() != y.labels.size())
+      return false;
+    for (size_t k = 0; k < x.labels.size(); ++k) {
+      if (x.labels[k].start_s != y.labels[k].start_s || x.labels[k].end_s != y.labels[k].end_s ||
+          x.labels[k].text != y.labels[k].text)
+        return false;
+    }
+  }
+  return true;
+}
 }  // namespace
 
 MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWindow(parent) {
@@ -72,27 +94,48 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   quantity_combo_->setCurrentIndex(2);
   auto* show_all = new QToolButton(plots_box);
   show_all->setText(tr("Show all"));
+  label_tier_combo_ = new QComboBox(plots_box);
+  label_tier_combo_->setObjectName("labelTierCombo");
+  label_tier_combo_->setEditable(true);
+  label_tier_combo_->setMinimumContentsLength(12);
+  label_tier_combo_->addItem(QStringLiteral("keys"));
+  label_tier_combo_->setToolTip(tr("The point tier of key targets the label lane edits (a new name makes a new tier)"));
   bar->addWidget(new QLabel(tr("Marker:"), plots_box));
   bar->addWidget(marker_combo_);
   bar->addWidget(quantity_combo_);
   bar->addStretch(1);
+  bar->addWidget(new QLabel(tr("Key tier:"), plots_box));
+  bar->addWidget(label_tier_combo_);
   bar->addWidget(show_all);
   plots_layout->addLayout(bar);
   plots_ = new TimeSeriesPanel(plots_box);
   plots_layout->addWidget(plots_, 1);
+  log_ = new LogPanel(this);
+  labels_ = new LabelSession(log_, this);
+  label_lane_ = new LabelLane(labels_, plots_box);
+  label_lane_->AlignWith(plots_->plot());
+  plots_layout->addWidget(label_lane_);
   plots_dock_ = new QDockWidget(tr("Time series"), this);
   plots_dock_->setObjectName("plotsDock");
   plots_dock_->setWidget(plots_box);
   addDockWidget(Qt::BottomDockWidgetArea, plots_dock_);
 
-  log_ = new LogPanel(this);
   log_dock_ = new QDockWidget(tr("Log"), this);
   log_dock_->setObjectName("logDock");
   log_dock_->setWidget(log_);
   addDockWidget(Qt::BottomDockWidgetArea, log_dock_);
   splitDockWidget(plots_dock_, log_dock_, Qt::Vertical);
+  label_counts_ = new LabelCountsPanel(this);
+  counts_dock_ = new QDockWidget(tr("Label counts"), this);
+  counts_dock_->setObjectName("countsDock");
+  counts_dock_->setWidget(label_counts_);
+  addDockWidget(Qt::LeftDockWidgetArea, counts_dock_);
+  splitDockWidget(takes_dock_, counts_dock_, Qt::Vertical);
+  connect(labels_, &LabelSession::LabelsChanged, this,
+          [this] { label_counts_->Refresh(labels_->has_take() ? labels_->model() : nullptr); });
   resizeDocks({plots_dock_, log_dock_}, {380, 90}, Qt::Vertical);
   resizeDocks({takes_dock_}, {430}, Qt::Horizontal);
+  resizeDocks({takes_dock_, counts_dock_}, {520, 180}, Qt::Vertical);
 
   playback_ = new Playback(this);
   import_runner_ = new ImportRunner(this);
@@ -107,6 +150,14 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   connect(marker_combo_, qOverload<int>(&QComboBox::activated), this, [this](int) { OnMarkerSeriesChosen(); });
   connect(quantity_combo_, qOverload<int>(&QComboBox::activated), this, [this](int) { OnMarkerSeriesChosen(); });
   connect(show_all, &QToolButton::clicked, plots_, &TimeSeriesPanel::ShowAll);
+  connect(plots_, &TimeSeriesPanel::TimeRangeChanged, label_lane_, &LabelLane::SetTimeRange);
+  connect(label_lane_, &LabelLane::SeekRequested, playback_, &Playback::Seek);
+  connect(label_lane_, &LabelLane::SnapRequested, this, [this] { SnapLabelToSpeedMinimum(); });
+  connect(label_tier_combo_, qOverload<int>(&QComboBox::activated), this,
+          [this](int) { SetLabelTier(label_tier_combo_->currentText()); });
+  connect(labels_, &LabelSession::Saved, this, [this](const QString& take, double ms) {
+    statusBar()->showMessage(tr("Labels of %1 saved (%2 ms)").arg(take).arg(ms, 0, 'f', 0), 3000);
+  });
 
   connect(import_runner_, &ImportRunner::ProgressChanged, this, [this](const QString& stage, double fraction) {
     if (import_progress_ == nullptr) return;
@@ -165,10 +216,21 @@ void MainWindow::BuildMenus() {
   file->addAction(tr("&Quit"), QKeySequence::Quit, this, &QWidget::close);
   UpdateRecentMenu();
 
+  QMenu* edit = menuBar()->addMenu(tr("&Edit"));
+  undo_action_ = labels_->undo_stack()->createUndoAction(this, tr("&Undo"));
+  undo_action_->setShortcuts({QKeySequence(Qt::CTRL | Qt::Key_Z)});
+  redo_action_ = labels_->undo_stack()->createRedoAction(this, tr("&Redo"));
+  redo_action_->setShortcuts({QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence(Qt::CTRL | Qt::Key_Y)});
+  edit->addAction(undo_action_);
+  edit->addAction(redo_action_);
+  edit->addSeparator();
+  edit->addAction(tr("&Label Lane"), QKeySequence(Qt::CTRL | Qt::Key_L), this, [this] { label_lane_->setFocus(); });
+
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(takes_dock_->toggleViewAction());
   view->addAction(plots_dock_->toggleViewAction());
   view->addAction(log_dock_->toggleViewAction());
+  view->addAction(counts_dock_->toggleViewAction());
   view->addSeparator();
   QAction* perspective = view->addAction(tr("&Perspective"));
   perspective->setCheckable(true);
@@ -223,6 +285,24 @@ void MainWindow::SaveLayout() {
 
 void MainWindow::closeEvent(QCloseEvent* event) {
   playback_->Pause();
+  // Unsaved labels are saved first; the window closes when they are written. A
+  // second close while they still wait (another writer holds the corpus) closes
+  // anyway, after saying so in the log and on stderr.
+  if (labels_->HasUnsavedEdits() && !close_requested_) {
+    close_requested_ = true;
+    labels_->SaveNow();
+    log_->Info(tr("Saving labels before closing…"));
+    connect(labels_, &LabelSession::Saved, this, [this] {
+      if (close_requested_ && !labels_->HasUnsavedEdits()) close();
+    });
+    event->ignore();
+    return;
+  }
+  if (labels_->HasUnsavedEdits()) {
+    const QString m = tr("Closing with label edits not yet saved to %1 (retried once more on exit)").arg(corpus_path());
+    log_->Warning(m);
+    std::fprintf(stderr, "csw-workbench: %s\n", qPrintable(m));
+  }
   import_runner_->Cancel();
   SaveLayout();
   event->accept();
@@ -265,6 +345,8 @@ bool MainWindow::OpenCorpus(const QString& path) {
     std::vector<TakeSummary> takes = corpus.Takes();
     corpus_ = corpus;
     take_.reset();
+    labels_->ForgetSaved();
+    labels_->SetTake(std::string(), nullptr, label_tier_combo_->currentText().toStdString());
     marker_view_->SetTake(nullptr);
     plots_->SetTake(nullptr);
     playback_->SetTake(0, 0, nullptr);
@@ -287,7 +369,10 @@ bool MainWindow::SelectTake(const QString& name) {
   if (take_ && QString::fromStdString(take_->name) == name) return true;
   std::shared_ptr<const Take> take;
   try {
-    take = std::make_shared<const Take>(corpus_->LoadTake(name.toStdString()));
+    Take loaded = corpus_->LoadTake(name.toStdString());
+    // Labels this session saved (or is saving) are newer than what the open corpus holds.
+    if (auto tiers = labels_->KnownTiers(corpus_->path(), loaded.name)) loaded.tiers = std::move(*tiers);
+    take = std::make_shared<const Take>(std::move(loaded));
   } catch (const std::exception& e) {
     log_->Error(tr("Cannot load take %1: %2").arg(name, QString::fromStdString(e.what())));
     return false;
@@ -311,6 +396,7 @@ bool MainWindow::SelectTake(const QString& name) {
     log_->Warning(tr("Marker set not applied to %1: %2").arg(name, QString::fromStdString(e.what())));
     marker_view_->SetTake(take_, nullptr);
   }
+  plots_->SetHiddenTier(label_tier_combo_->currentText().trimmed());  // drawn by the label lane instead
   plots_->SetTake(take_);
   playback_->SetTake(take_->frames(), take_->rate_hz, &take_->audio);  // rewinds to frame 0
   marker_combo_->clear();
@@ -336,9 +422,75 @@ bool MainWindow::SelectTake(const QString& name) {
     browser_->SelectTake(name);
     browser_->blockSignals(false);
   }
+  SetLabelTier(label_tier_combo_->currentText());
   UpdateTitle();
   OnFrameChanged(playback_->frame());
   emit TakeShown(name);
+  return true;
+}
+
+bool MainWindow::SetLabelTier(const QString& tier) {
+  const QString name = tier.trimmed().isEmpty() ? QStringLiteral("keys") : tier.trimmed();
+  if (label_tier_combo_->currentText() != name) label_tier_combo_->setCurrentText(name);
+  if (!take_ || !corpus_) {
+    labels_->SetTake(std::string(), nullptr, name.toStdString());
+    return false;
+  }
+  try {
+    labels_->SetTake(corpus_->path(), take_, name.toStdString());
+  } catch (const std::exception& e) {
+    log_->Error(tr("Cannot label tier %1: %2").arg(name, QString::fromStdString(e.what())));
+    labels_->SetTake(std::string(), nullptr, name.toStdString());
+    plots_->SetHiddenTier(QString());
+    return false;
+  }
+  plots_->SetHiddenTier(name);
+  // The plots show the tiers as this session last wrote them (e.g. the tier
+  // just left, with its edits), not as they were loaded.
+  if (auto known = labels_->KnownTiers(corpus_->path(), take_->name); known && !SameTiers(*known, take_->tiers)) {
+    auto copy = std::make_shared<Take>(*take_);
+    copy->tiers = std::move(*known);
+    take_ = copy;
+    const double t0 = plots_->view_start(), t1 = plots_->view_end();
+    const int marker = plots_->marker();
+    const MarkerQuantity quantity = plots_->quantity();
+    plots_->SetTake(take_);
+    plots_->SetMarkerSeries(marker, quantity);
+    plots_->SetTimeRange(t0, t1);
+    plots_->SetCursorTime(playback_->time_s());
+  }
+  label_lane_->SetTimeRange(plots_->view_start(), plots_->view_end());
+  label_lane_->SetCursorFrame(playback_->frame());
+  return true;
+}
+
+bool MainWindow::SnapLabelToSpeedMinimum() {
+  if (!take_ || !labels_->has_take()) return false;
+  const int64_t frame = playback_->frame();
+  const long index = labels_->LabelAtFrame(frame);
+  if (index < 0) {
+    log_->Info(tr("Snap: no label on frame %1").arg(frame + take_->first_frame));
+    return false;
+  }
+  const int marker = plots_->marker();
+  if (marker < 0) {
+    log_->Warning(tr("Snap: choose the marker whose speed minima labels snap to (Marker, above the plots)"));
+    return false;
+  }
+  const std::vector<float> speed = MarkerSeries(*take_, marker, MarkerQuantity::kSpeed);
+  const auto window = std::max<int64_t>(1, std::llround(kSnapWindowS * take_->rate_hz));
+  const int64_t to = NearestSpeedMinimum(speed, frame, window);
+  const QString name = QString::fromStdString(take_->marker_names[static_cast<size_t>(marker)]);
+  if (to < 0) {
+    log_->Info(tr("Snap: %1's speed has no minimum within %2 s of frame %3")
+                   .arg(name)
+                   .arg(kSnapWindowS)
+                   .arg(frame + take_->first_frame));
+    return false;
+  }
+  if (to == frame) return true;
+  if (!labels_->MoveLabel(index, to)) return false;
+  playback_->Seek(to);
   return true;
 }
 
@@ -366,6 +518,7 @@ bool MainWindow::LoadMarkerSetFile(const QString& path) {
 
 void MainWindow::OnFrameChanged(qint64 frame) {
   marker_view_->SetFrame(frame);
+  label_lane_->SetCursorFrame(frame);
   if (take_ && take_->rate_hz > 0) {
     double t = static_cast<double>(frame) / take_->rate_hz;
     plots_->SetCursorTime(t);

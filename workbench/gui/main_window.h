@@ -23,6 +23,9 @@ namespace csw::gui {
 
 class CorpusBrowser;
 class ImportRunner;
+class LabelCountsPanel;
+class LabelLane;
+class LabelSession;
 class LogPanel;
 class MarkerView;
 class Playback;
@@ -48,6 +51,15 @@ class MainWindow : public QMainWindow {
   // Saves the time-series panel / the 3D view as PNG, SVG or PDF; false (and a log line) on failure.
   bool ExportPlot(const QString& path, int width = 0, int height = 0);
   bool Export3dView(const QString& path);
+  // Labels `tier` (a point tier of key codes; created empty when the take has
+  // none) of the shown take in the key-label lane; false (and a log line) when
+  // the take's tier of that name cannot be labelled.
+  bool SetLabelTier(const QString& tier);
+  // Moves the label on the cursor frame to the nearest speed minimum of the
+  // marker lane's marker within kSnapWindowS (key S in the label lane); false
+  // (and a log line) when there is no label there, no marker lane or no minimum.
+  static constexpr double kSnapWindowS = 0.25;
+  bool SnapLabelToSpeedMinimum();
 
   QString corpus_path() const;
   std::shared_ptr<const Take> take() const { return take_; }
@@ -62,6 +74,13 @@ class MainWindow : public QMainWindow {
   QProgressDialog* import_progress() const { return import_progress_; }
   QComboBox* marker_combo() const { return marker_combo_; }
   QComboBox* quantity_combo() const { return quantity_combo_; }
+  QComboBox* label_tier_combo() const { return label_tier_combo_; }
+  LabelSession* labels() const { return labels_; }
+  LabelLane* label_lane() const { return label_lane_; }
+  LabelCountsPanel* label_counts() const { return label_counts_; }
+  QDockWidget* counts_dock() const { return counts_dock_; }
+  QAction* undo_action() const { return undo_action_; }
+  QAction* redo_action() const { return redo_action_; }
   QDockWidget* takes_dock() const { return takes_dock_; }
   QDockWidget* plots_dock() const { return plots_dock_; }
   QDockWidget* log_dock() const { return log_dock_; }
@@ -103,12 +122,20 @@ class MainWindow : public QMainWindow {
   QProgressDialog* import_progress_ = nullptr;
   QComboBox* marker_combo_ = nullptr;
   QComboBox* quantity_combo_ = nullptr;
+  QComboBox* label_tier_combo_ = nullptr;
+  LabelSession* labels_ = nullptr;
+  LabelLane* label_lane_ = nullptr;
+  LabelCountsPanel* label_counts_ = nullptr;
+  QDockWidget* counts_dock_ = nullptr;
+  QAction* undo_action_ = nullptr;
+  QAction* redo_action_ = nullptr;
   QDockWidget* takes_dock_ = nullptr;
   QDockWidget* plots_dock_ = nullptr;
   QDockWidget* log_dock_ = nullptr;
   QMenu* recent_menu_ = nullptr;
   QLabel* frame_label_ = nullptr;
   QAction* play_action_ = nullptr;
+  bool close_requested_ = false;
 };
 
 }  // namespace csw::gui

@@ -196,6 +196,16 @@ void TimeSeriesPanel::SetMarkerSeries(int marker, MarkerQuantity quantity) {
   SetTimeRange(t0, t1);
 }
 
+void TimeSeriesPanel::SetHiddenTier(const QString& name) {
+  if (name == hidden_tier_) return;
+  hidden_tier_ = name;
+  if (!take_) return;
+  double t0 = view_start(), t1 = view_end(), cursor = cursor_t_;
+  Rebuild();
+  SetTimeRange(t0, t1);
+  SetCursorTime(cursor);
+}
+
 TimeSeriesPanel::Lane& TimeSeriesPanel::AddLane(LaneKind kind, const QString& name, double stretch) {
   auto lane = std::make_unique<Lane>();
   lane->kind = kind;
@@ -273,6 +283,7 @@ void TimeSeriesPanel::Rebuild() {
     lane.rect->axis(QCPAxis::atLeft)->setTicker(ticker);
   }
   for (const LabelTier& t : take_->tiers) {
+    if (!hidden_tier_.isEmpty() && QString::fromStdString(t.name) == hidden_tier_) continue;
     Lane& lane = AddLane(LaneKind::kTier, QString::fromStdString(t.name), 0.5);
     lane.tier = new TierPlottable(lane.rect->axis(QCPAxis::atBottom), lane.rect->axis(QCPAxis::atLeft), t);
     QCPAxis* y = lane.rect->axis(QCPAxis::atLeft);

@@ -43,6 +43,10 @@ class TimeSeriesPanel : public QWidget {
   // Adds (or replaces) the marker lane; marker < 0 removes it.
   void SetMarkerSeries(int marker, MarkerQuantity quantity);
   int marker() const { return marker_; }
+  // A tier not drawn as a lane (the key tier the label lane edits); "" = none.
+  // Keeps the view and the cursor.
+  void SetHiddenTier(const QString& name);
+  const QString& hidden_tier() const { return hidden_tier_; }
   MarkerQuantity quantity() const { return quantity_; }
 
   // The playback cursor (seconds); keeps the cursor inside the visible range.
@@ -101,6 +105,7 @@ class TimeSeriesPanel : public QWidget {
   std::shared_ptr<const MinMaxPyramid> audio_;  // the take's audio (channels averaged)
   std::vector<std::unique_ptr<Lane>> lanes_;
   int marker_ = -1;
+  QString hidden_tier_;
   MarkerQuantity quantity_ = MarkerQuantity::kZ;
   double cursor_t_ = 0.0;
   double duration_s_ = 0.0;

@@ -15,6 +15,8 @@
 #include "workbench/gui/corpus_browser.h"
 #include "workbench/gui/demo_take.h"
 #include "workbench/gui/import_runner.h"
+#include "workbench/gui/label_lane.h"
+#include "workbench/gui/label_session.h"
 #include "workbench/gui/log_panel.h"
 #include "workbench/gui/main_window.h"
 #include "workbench/gui/marker_view.h"
@@ -113,6 +115,19 @@ QStringList RunTour(const TourOptions& options) {
   window.marker_view()->Zoom(1.25);
   window.marker_view()->Pan(0, 110);
   written << Shot(window.marker_view(), options.out_dir, "03-3d-view.png");
+
+  // 5b. The key-label lane under the plots, on the demo take's `keys` tier: the
+  // cursor put on the key target nearest that placement target (the selected
+  // label, orange), as the lane's Ctrl+Right / Ctrl+Left jumps would.
+  if (!window.SetLabelTier(QStringLiteral("keys")) || window.labels()->model()->size() == 0)
+    throw Error("tour: the demo take's keys tier cannot be labelled");
+  {
+    const LabelModel& model = *window.labels()->model();
+    const long near = model.Find(key_s, 1.0);
+    if (near >= 0) window.playback()->Seek(window.labels()->TimeFrame(model.at(static_cast<size_t>(near)).start_s));
+  }
+  window.label_lane()->setFocus();
+  written << Shot(window.plots_dock(), options.out_dir, "label-lane.png");
 
   // 6. The imported captures: the demo corpus's first take, then a real face capture.
   if (!options.markerset.isEmpty()) window.LoadMarkerSetFile(options.markerset);

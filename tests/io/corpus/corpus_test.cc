@@ -347,6 +347,35 @@ TEST(Corpus, RemoveTakeAndReplaceTiersAndAudio) {
   EXPECT_EQ(Corpus::Open(path).LoadTake("b").audio_path, "");
 }
 
+TEST(Corpus, LoadTiersReadsTheTiersAloneAsWritten) {
+  TempDir dir;
+  const std::string path = (dir / "c.h5").string();
+  WriteCorpus(path, {MakeFullTake("a")});
+  LabelTier keys{"keys", LabelTier::Kind::kPoint, 0.0, 2.0, {{0.25, 0.25, "13"}, {1.5, 1.5, "00"}}};
+  LabelTier words{"mots", LabelTier::Kind::kInterval, 0.0, 1.0, {{0.0, 0.5, "bonjour"}, {0.5, 1.0, "ça"}}};
+  {
+    CorpusTransaction tx(path);
+    tx.WriteTiers("a", {words, keys});
+    tx.Commit();
+  }
+  const std::vector<LabelTier> tiers = Corpus::Open(path).LoadTiers("a");
+  ASSERT_EQ(tiers.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const LabelTier& want = i == 0 ? words : keys;
+    EXPECT_EQ(tiers[i].name, want.name);
+    EXPECT_EQ(tiers[i].kind, want.kind);
+    EXPECT_EQ(tiers[i].start_s, want.start_s);
+    EXPECT_EQ(tiers[i].end_s, want.end_s);
+    ASSERT_EQ(tiers[i].labels.size(), want.labels.size());
+    for (size_t k = 0; k < want.labels.size(); ++k) {
+      EXPECT_EQ(tiers[i].labels[k].start_s, want.labels[k].start_s);
+      EXPECT_EQ(tiers[i].labels[k].end_s, want.labels[k].end_s);
+      EXPECT_EQ(tiers[i].labels[k].text, want.labels[k].text);
+    }
+  }
+  EXPECT_THROW(Corpus::Open(path).LoadTiers("nope"), InvalidInput);
+}
+
 TEST(Corpus, RepeatedTierEditsKeepTheFileSizeBounded) {
   TempDir dir;
   const std::string path = (dir / "c.h5").string();
