@@ -27,7 +27,7 @@ json Json(const std::string& args, const fs::path& dir) {
 
 TEST(SigningCli, SimulateSegmentTransitionsSequenceAndBvhRoundTrip) {
   testing::TempDir dir;
-  const std::string count = testing::kSanitized ? "6" : "16";
+  const std::string count = "16";  // also under the sanitizers: 6 takes leave the plane too loosely fitted
   ASSERT_EQ(
       Csw("-q simulate signs --count " + count + " --seed 9 --hand-offset 0 -o " + Q(dir / "sim"), dir.path()).code, 0);
   const std::string corpus = Q(dir / "sim" / "signs.h5");
@@ -36,7 +36,7 @@ TEST(SigningCli, SimulateSegmentTransitionsSequenceAndBvhRoundTrip) {
   // the plane's coefficients within 5 %.
   const json t = Json("-q transitions " + corpus + " --tiers signs --joints all -o " + Q(dir / "d.json"), dir.path());
   ASSERT_TRUE(t.is_object());
-  EXPECT_GE(t["transitions"].get<int>(), testing::kSanitized ? 10 : 35);
+  EXPECT_GE(t["transitions"].get<int>(), 35);
   EXPECT_EQ(t["best"], "surface");
   const double seed_theta[3] = {0.148777, 0.663958, 0.275229};
   for (const json& m : t["models"]) {
