@@ -1,0 +1,192 @@
+#include "synth/synthesis_plan.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <utility>
+
+#include "core/error.h"
+
+namespace csw::dict {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return kNaN;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string SuccessionKey(const KeyCode& a, const KeyCode& b) { return SuccessionCode(a, b); }
+
+}  // namespace
+
+const char* PhasingRuleName(PhasingRule rule) { return rule == PhasingRule::kGlobal ? "global" : "dikey"; }
+
+bool ParsePhasingRule(const std::string& name, PhasingRule* rule) {
+  if (name == "global") {
+    *rule = PhasingRule::kGlobal;
+  } else if (name == "dikey") {
+    *rule = PhasingRule::kPerDikey;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+std::string PlanOptions::Check() const {
+  if (!(min_interval_s > 0 && min_interval_s < 1)) return "min_interval_s must be in (0, 1) s";
+  if (!(default_rest_s > 0 && default_rest_s < 10)) return "default_rest_s must be in (0, 10) s";
+  return "";
+}
+
+double MeanPhoneDuration(const std::vector<Phone>& phones) {
+  double sum = 0;
+  int n = 0;
+  for (const Phone& p : phones) {
+    if (p.ipa.empty() || p.ipa == "_" || p.ipa == ";") continue;
+    sum += p.end_s - p.start_s;
+    ++n;
+  }
+  return n ? sum / n : kNaN;
+}
+
+double MeanPhoneDuration(const Dictionary& dictionary) {
+  // Each phone interval once: (take, start) identifies it.
+  std::set<std::pair<std::string, double>> seen;
+  double sum = 0;
+  int n = 0;
+  auto add = [&](const std::string& take, const std::string& phone, double start, double end) {
+    if (phone.empty() || phone == "_" || phone == ";") return;
+    if (!seen.insert({take, start}).second) return;
+    sum += end - start;
+    ++n;
+  };
+  for (const DiphoneUnit& u : dictionary.diphones) {
+    add(u.take, u.phone1, u.phone1_start_s, u.phone1_end_s);
+    add(u.take, u.phone2, u.phone2_start_s, u.phone2_end_s);
+  }
+  return n ? sum / n : kNaN;
+}
+
+SynthesisPlan PlanKeys(const std::vector<Key>& keys, const std::vector<Phone>& phones, double audio_duration_s,
+                       const Dictionary& dictionary, const PlanOptions& options) {
+  if (const std::string why = options.Check(); !why.empty()) throw InvalidInput("synthesis plan: " + why);
+  if (!std::isfinite(audio_duration_s) || audio_duration_s <= 0) {
+    throw InvalidInput("synthesis plan: the audio duration must be positive");
+  }
+  const int np = static_cast<int>(phones.size());
+  auto phone = [&](int index, const char* what, size_t k) -> const Phone& {
+    if (index < 0 || index >= np) {
+      throw InvalidInput("synthesis plan: key " + std::to_string(k + 1) + ": " + what + " phone index " +
+                         std::to_string(index) + " outside the " + std::to_string(np) + " phones");
+    }
+    const Phone& p = phones[static_cast<size_t>(index)];
+    if (!std::isfinite(p.start_s) || !std::isfinite(p.end_s)) {
+      throw InvalidInput("synthesis plan: phone " + std::to_string(index + 1) + " has a time that is not finite");
+    }
+    return p;
+  };
+
+  // Dictionary statistics: mean phasing per succession and per arriving key
+  // code (a unit does not store its key's type, and shape 5 at a vowel
+  // placement may be a lone vowel or a CV key: the code is the finest pool
+  // that never mixes keys of different codes).
+  std::map<std::string, std::pair<double, int>> by_succession;
+  std::map<std::string, std::pair<double, int>> by_arriving;
+  std::vector<double> leave_rest, reach_rest;
+  for (const DikeyUnit& u : dictionary.dikeys) {
+    if (u.from.IsRest() && !u.to.IsRest()) leave_rest.push_back(u.duration_s());
+    if (u.to.IsRest() && !u.from.IsRest()) reach_rest.push_back(u.duration_s());
+    if (!std::isfinite(u.phasing_s) || u.to.IsRest()) continue;
+    auto& s = by_succession[SuccessionKey(u.from, u.to)];
+    s.first += u.phasing_s;
+    ++s.second;
+    auto& a = by_arriving[u.to.Text()];
+    a.first += u.phasing_s;
+    ++a.second;
+  }
+  const double leave = leave_rest.empty() ? options.default_rest_s : Median(leave_rest);
+  const double reach = reach_rest.empty() ? options.default_rest_s : Median(reach_rest);
+
+  SynthesisPlan plan;
+  std::vector<PlannedKey> cued;
+  KeyCode previous;  // rest
+  for (size_t k = 0; k < keys.size(); ++k) {
+    const Key& key = keys[k];
+    if (key.type == KeyType::kRest) continue;
+    PlannedKey p;
+    p.code = KeyCode{key.placement, key.shape};
+    p.type = key.type;
+    p.a1_s = key.a1_s;
+    if (!std::isfinite(p.a1_s)) throw InvalidInput("synthesis plan: key " + std::to_string(k + 1) + ": A1 not finite");
+    double global = 0;
+    switch (key.type) {
+      case KeyType::kCV: {
+        const Phone& c = phone(key.consonant_phone, "consonant", k);
+        global = 0.5 * (c.start_s + c.end_s);
+        break;
+      }
+      case KeyType::kVowelAlone:
+        global = phone(key.vowel_phone, "vowel", k).start_s;
+        break;
+      case KeyType::kConsonantAlone:
+        global = phone(key.consonant_phone, "consonant", k).start_s;
+        break;
+      case KeyType::kRest:
+        break;
+    }
+    p.target_s = global;
+    p.source = "global";
+    if (options.rule == PhasingRule::kPerDikey) {
+      const auto s = by_succession.find(SuccessionKey(previous, p.code));
+      const auto a = by_arriving.find(p.code.Text());
+      if (s != by_succession.end()) {
+        p.target_s = p.a1_s + s->second.first / s->second.second;
+        p.source = "dikey";
+      } else if (a != by_arriving.end()) {
+        p.target_s = p.a1_s + a->second.first / a->second.second;
+        p.source = "code";
+      }
+    }
+    cued.push_back(p);
+    previous = p.code;
+  }
+
+  // Strictly increasing targets, min_interval_s apart.
+  for (size_t i = 1; i < cued.size(); ++i) {
+    const double earliest = cued[i - 1].target_s + options.min_interval_s;
+    if (cued[i].target_s < earliest) {
+      cued[i].target_s = earliest;
+      cued[i].source += "+pushed";
+    }
+  }
+
+  double first = cued.empty() ? 0.5 * audio_duration_s : cued.front().target_s;
+  double last = cued.empty() ? 0.5 * audio_duration_s + options.min_interval_s : cued.back().target_s;
+  plan.lead_in_s = std::max(0.0, leave - first);
+  for (PlannedKey& p : cued) {
+    p.target_s += plan.lead_in_s;
+    p.a1_s += plan.lead_in_s;
+  }
+  first += plan.lead_in_s;
+  last += plan.lead_in_s;
+  PlannedKey rest_in;
+  rest_in.a1_s = kNaN;
+  rest_in.target_s = first - leave;
+  rest_in.source = "rest";
+  PlannedKey rest_out = rest_in;
+  rest_out.target_s = last + reach;
+  plan.keys.push_back(rest_in);
+  plan.keys.insert(plan.keys.end(), cued.begin(), cued.end());
+  plan.keys.push_back(rest_out);
+  plan.duration_s = std::max(plan.lead_in_s + audio_duration_s, rest_out.target_s);
+  return plan;
+}
+
+}  // namespace csw::dict

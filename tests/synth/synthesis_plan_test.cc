@@ -1,0 +1,162 @@
+// The timing plan of synthesis (synth/synthesis_plan.h): target times from the
+// seed's global rule and from per-dikey phasing, rests, lead-in, pushing.
+// Phones and dictionaries are built by hand, so every expected time is
+// computed here from the rule's definition.
+#include "synth/synthesis_plan.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/error.h"
+
+namespace csw::dict {
+namespace {
+
+Phone P(const std::string& ipa, double a, double b) {
+  Phone p;
+  p.ipa = ipa;
+  p.start_s = a;
+  p.end_s = b;
+  return p;
+}
+
+// "_ p a i t _": a CV key (p a), a lone vowel (i), a lone consonant (t).
+std::vector<Phone> Phones() {
+  return {P("", 0.0, 0.5), P("p", 0.5, 0.6), P("a", 0.6, 0.75), P("i", 0.75, 0.9), P("t", 0.9, 1.0), P("", 1.0, 1.2)};
+}
+
+DikeyUnit Unit(KeyCode from, KeyCode to, double duration, double phasing) {
+  DikeyUnit u;
+  u.from = from;
+  u.to = to;
+  u.start_s = 1.0;
+  u.end_s = 1.0 + duration;
+  u.phasing_s = phasing;
+  return u;
+}
+
+TEST(SynthesisPlan, GlobalRuleTargetsMiddleOfConsonantVowelOnsetConsonantOnset) {
+  const std::vector<Phone> phones = Phones();
+  const std::vector<Key> keys = CueKeys(phones);
+  ASSERT_EQ(keys.size(), 5u);  // rest, CV, V, C, rest
+  ASSERT_EQ(keys[1].type, KeyType::kCV);
+  ASSERT_EQ(keys[2].type, KeyType::kVowelAlone);
+  ASSERT_EQ(keys[3].type, KeyType::kConsonantAlone);
+  Dictionary d;
+  d.dikeys.push_back(Unit(KeyCode{}, KeyCode{keys[1].placement, keys[1].shape}, 0.3, 0.0));  // leave rest: 0.3 s
+  d.dikeys.push_back(Unit(KeyCode{1, 5}, KeyCode{}, 0.45, NAN));                               // reach rest: 0.45 s
+  PlanOptions o;
+  o.rule = PhasingRule::kGlobal;
+  const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
+  ASSERT_EQ(plan.keys.size(), 5u);
+  EXPECT_DOUBLE_EQ(plan.lead_in_s, 0.0);  // first target 0.55 > 0.3
+  EXPECT_NEAR(plan.keys[1].target_s, 0.55, 1e-12);  // middle of [p]
+  EXPECT_NEAR(plan.keys[2].target_s, 0.75, 1e-12);  // onset of [i]
+  EXPECT_NEAR(plan.keys[3].target_s, 0.90, 1e-12);  // onset of [t]
+  EXPECT_NEAR(plan.keys[0].target_s, 0.25, 1e-12);  // 0.55 - 0.3
+  EXPECT_NEAR(plan.keys[4].target_s, 1.35, 1e-12);  // 0.90 + 0.45
+  EXPECT_TRUE(plan.keys[0].code.IsRest());
+  EXPECT_TRUE(plan.keys[4].code.IsRest());
+  EXPECT_NEAR(plan.duration_s, 1.35, 1e-12);  // the return to rest outlasts the audio
+  for (int i = 1; i <= 3; ++i) EXPECT_EQ(plan.keys[static_cast<size_t>(i)].source, "global");
+}
+
+TEST(SynthesisPlan, PerDikeyPhasingUsesTheSuccessionThenTheCodeThenTheGlobalRule) {
+  const std::vector<Phone> phones = Phones();
+  const std::vector<Key> keys = CueKeys(phones);
+  const KeyCode cv{keys[1].placement, keys[1].shape}, v{keys[2].placement, keys[2].shape};
+  Dictionary d;
+  // Rest → CV: phasing -0.02 and -0.04 (mean -0.03); CV → V absent as a
+  // succession but V reached from elsewhere with phasing +0.06; the lone
+  // consonant never reached: the global rule.
+  d.dikeys.push_back(Unit(KeyCode{}, cv, 0.2, -0.02));
+  d.dikeys.push_back(Unit(KeyCode{}, cv, 0.4, -0.04));
+  d.dikeys.push_back(Unit(KeyCode{2, 3}, v, 0.2, 0.06));
+  PlanOptions o;
+  o.rule = PhasingRule::kPerDikey;
+  const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
+  EXPECT_NEAR(plan.keys[1].target_s, 0.5 - 0.03, 1e-12);  // A1 = onset of [p]
+  EXPECT_EQ(plan.keys[1].source, "dikey");
+  EXPECT_NEAR(plan.keys[2].target_s, 0.75 + 0.06, 1e-12);  // A1 = onset of [i]
+  EXPECT_EQ(plan.keys[2].source, "code");
+  EXPECT_NEAR(plan.keys[3].target_s, 0.90, 1e-12);
+  EXPECT_EQ(plan.keys[3].source, "global");
+  // Leaving rest: median of 0.2 and 0.4 = 0.3 s; nothing reaches rest: 0.4 s.
+  EXPECT_NEAR(plan.keys[0].target_s, 0.47 - 0.3, 1e-12);
+  EXPECT_NEAR(plan.keys[4].target_s, 0.90 + 0.4, 1e-12);
+}
+
+TEST(SynthesisPlan, LeadInWhenTheFirstMovementWouldStartBeforeTimeZero) {
+  std::vector<Phone> phones = {P("p", 0.0, 0.1), P("a", 0.1, 0.3), P("", 0.3, 0.5)};
+  const std::vector<Key> keys = CueKeys(phones);
+  Dictionary d;
+  d.dikeys.push_back(Unit(KeyCode{}, KeyCode{keys[1].placement, keys[1].shape}, 0.5, 0.0));
+  PlanOptions o;
+  o.rule = PhasingRule::kGlobal;
+  const SynthesisPlan plan = PlanKeys(keys, phones, 0.5, d, o);
+  // First target 0.05 (middle of [p]) needs 0.5 s from rest: lead-in 0.45 s.
+  EXPECT_NEAR(plan.lead_in_s, 0.45, 1e-12);
+  EXPECT_NEAR(plan.keys[0].target_s, 0.0, 1e-12);
+  EXPECT_NEAR(plan.keys[1].target_s, 0.5, 1e-12);
+  EXPECT_NEAR(plan.keys[1].a1_s, 0.45, 1e-12);
+}
+
+TEST(SynthesisPlan, TargetsArePushedApartByTheMinimumInterval) {
+  const std::vector<Phone> phones = Phones();
+  const std::vector<Key> keys = CueKeys(phones);
+  Dictionary d;
+  // The CV key's succession says +0.3 s (after the vowel's onset at 0.75).
+  d.dikeys.push_back(Unit(KeyCode{}, KeyCode{keys[1].placement, keys[1].shape}, 0.3, 0.3));
+  PlanOptions o;
+  o.min_interval_s = 0.05;
+  const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
+  EXPECT_NEAR(plan.keys[1].target_s, 0.8, 1e-12);
+  EXPECT_NEAR(plan.keys[2].target_s, 0.85, 1e-12);  // pushed from 0.75
+  EXPECT_EQ(plan.keys[2].source, "global+pushed");
+  EXPECT_NEAR(plan.keys[3].target_s, 0.90, 1e-12);  // 0.90 already 0.05 after
+  for (size_t i = 1; i < plan.keys.size(); ++i) EXPECT_GT(plan.keys[i].target_s, plan.keys[i - 1].target_s);
+}
+
+TEST(SynthesisPlan, MeanPhoneDurationOfPhonesAndOfADictionary) {
+  EXPECT_NEAR(MeanPhoneDuration(Phones()), (0.1 + 0.15 + 0.15 + 0.1) / 4, 1e-12);
+  Dictionary d;
+  DiphoneUnit a;
+  a.take = "t";
+  a.phone1 = "p";
+  a.phone1_start_s = 0.5;
+  a.phone1_end_s = 0.6;
+  a.phone2 = "a";
+  a.phone2_start_s = 0.6;
+  a.phone2_end_s = 0.8;
+  DiphoneUnit b = a;  // a + _: [a] again (counted once) and a pause (not counted)
+  b.phone1 = "a";
+  b.phone1_start_s = 0.6;
+  b.phone1_end_s = 0.8;
+  b.phone2 = "_";
+  b.phone2_start_s = 0.8;
+  b.phone2_end_s = 1.0;
+  d.diphones = {a, b};
+  EXPECT_NEAR(MeanPhoneDuration(d), (0.1 + 0.2) / 2, 1e-12);
+  EXPECT_TRUE(std::isnan(MeanPhoneDuration(Dictionary{})));
+}
+
+TEST(SynthesisPlan, BadInputGivesOneClearError) {
+  std::vector<Key> keys = CueKeys(Phones());
+  keys[1].consonant_phone = 42;
+  try {
+    PlanKeys(keys, Phones(), 1.2, Dictionary{}, PlanOptions{.rule = PhasingRule::kGlobal});
+    FAIL() << "no error";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("key 2: consonant phone index 42 outside the 6 phones"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(PlanKeys(CueKeys(Phones()), Phones(), 0.0, Dictionary{}), InvalidInput);
+  PhasingRule r;
+  EXPECT_TRUE(ParsePhasingRule("global", &r));
+  EXPECT_EQ(r, PhasingRule::kGlobal);
+  EXPECT_FALSE(ParsePhasingRule("seed", &r));
+}
+
+}  // namespace
+}  // namespace csw::dict
