@@ -282,4 +282,25 @@ void CheckModelsMatch(const Dictionary& dictionary, const std::string& fingerpri
                      "…): its parameters mean nothing under other models; rebuild it with csw dict build");
 }
 
+void AppendMarkerJumps(const MarkerArray& markers, std::vector<double>* jumps) {
+  for (int64_t f = 1; f < markers.frames(); ++f) {
+    for (int64_t m = 0; m < markers.markers(); ++m) {
+      if (!markers.Visible(f - 1, m) || !markers.Visible(f, m)) continue;
+      const float* a = markers.at(f - 1, m);
+      const float* b = markers.at(f, m);
+      const double dx = double(b[0]) - a[0], dy = double(b[1]) - a[1], dz = double(b[2]) - a[2];
+      jumps->push_back(std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+  }
+}
+
+double Quantile(std::vector<double>& values, double q) {
+  if (values.empty()) return kNaN;
+  std::sort(values.begin(), values.end());
+  const double pos = std::clamp(q, 0.0, 1.0) * static_cast<double>(values.size() - 1);
+  const size_t i = static_cast<size_t>(std::floor(pos));
+  const size_t j = std::min(i + 1, values.size() - 1);
+  return values[i] + (pos - static_cast<double>(i)) * (values[j] - values[i]);
+}
+
 }  // namespace csw::dict

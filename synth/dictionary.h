@@ -12,10 +12,12 @@
 // (docs/dictionary-format.md); workbench/jobs/dict_job builds them.
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "core/labels.h"
+#include "core/take.h"
 
 namespace csw {
 
@@ -133,7 +135,20 @@ struct Dictionary {
   std::vector<DikeyUnit> dikeys;
   std::vector<std::string> face_parameter_names;  // Q
   std::vector<DiphoneUnit> diphones;
+  // The corpus's own continuity, for `csw say --check`: the 99th percentile
+  // and the maximum of the frame-to-frame jumps (mm) of every model marker as
+  // the models reconstruct the corpus's takes (solved frame pairs only), at
+  // the corpus's frame rate; NaN when unknown (older files).
+  double corpus_rate_hz = std::numeric_limits<double>::quiet_NaN();
+  double corpus_p99_jump_mm = std::numeric_limits<double>::quiet_NaN();
+  double corpus_max_jump_mm = std::numeric_limits<double>::quiet_NaN();
 };
+
+// Frame-to-frame jumps (mm) of every marker between successive frames where
+// both samples are visible, appended to `jumps`.
+void AppendMarkerJumps(const MarkerArray& markers, std::vector<double>* jumps);
+// The q-quantile (0–1, linear interpolation) of `values` (reordered); NaN when empty.
+double Quantile(std::vector<double>& values, double q);
 
 // Coverage of successions: counts[from][to] of placement (6 × 6, 0 = rest /
 // free space) and shape (9 × 9, 0 = rest) successions, of whole keys, and the

@@ -41,8 +41,8 @@ struct PlannedKey {
 };
 
 struct SynthesisPlan {
-  double lead_in_s = 0;     // silence added before the text's audio and phones
-  double duration_s = 0;    // output duration: lead-in + audio + the final return to rest
+  double lead_in_s = 0;          // silence added before the text's audio and phones
+  double duration_s = 0;         // output duration: lead-in + audio + the final return to rest
   std::vector<PlannedKey> keys;  // rest first and last, targets strictly increasing
 };
 

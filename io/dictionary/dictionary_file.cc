@@ -6,6 +6,7 @@
 #include <cmath>
 #include <ctime>
 #include <filesystem>
+#include <limits>
 #include <optional>
 
 #include "core/error.h"
@@ -189,6 +190,9 @@ void SaveDictionaryFile(const std::string& path, const dict::Dictionary& d) {
     h5::WriteAttr(f, "corpus", d.corpus, where, "/");
     h5::WriteAttr(f, "keys_file", d.keys_file, where, "/");
     h5::WriteAttr(f, "key_tier", d.key_tier, where, "/");
+    h5::WriteAttr(f, "corpus_rate_hz", d.corpus_rate_hz, where, "/");
+    h5::WriteAttr(f, "corpus_p99_jump_mm", d.corpus_p99_jump_mm, where, "/");
+    h5::WriteAttr(f, "corpus_max_jump_mm", d.corpus_max_jump_mm, where, "/");
 
     const size_t n = d.dikeys.size();
     Handle g = h5::CreateGroup(f, "dikeys", where, "/dikeys");
@@ -422,6 +426,12 @@ dict::Dictionary LoadDictionaryFile(const std::string& path) {
   d.corpus = attr("corpus");
   d.keys_file = attr("keys_file");
   d.key_tier = attr("key_tier");
+  auto number = [&](const char* name) {
+    return h5::ReadAttrDouble(f, name, where, "/").value_or(std::numeric_limits<double>::quiet_NaN());
+  };
+  d.corpus_rate_hz = number("corpus_rate_hz");
+  d.corpus_p99_jump_mm = number("corpus_p99_jump_mm");
+  d.corpus_max_jump_mm = number("corpus_max_jump_mm");
   if (!h5::LinkExists(f, "dikeys")) Fail(path, "missing group /dikeys");
   Handle g = h5::OpenGroup(f, "dikeys", where, "/dikeys");
   const hid_t gi = g.get();

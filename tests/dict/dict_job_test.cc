@@ -147,6 +147,16 @@ TEST_F(DictJob, HoldsExactlyTheCorpusKeySuccessions) {
   }
   EXPECT_EQ(r["dikeys"]["successions"], successions);
   EXPECT_EQ(r["dikeys"]["kept"], successions);
+  // The corpus's continuity, as stored: the hand moves up to ~2 m/s (the
+  // virtual cuer's fastest keys), i.e. under 25 mm a frame at 120 Hz, and
+  // faster than 1 mm a frame for more than 1 % of the samples.
+  const dict::Dictionary stored = LoadDictionaryFile(o.output);
+  EXPECT_EQ(stored.corpus_p99_jump_mm, r["continuity"]["p99_jump_mm"].get<double>());
+  EXPECT_EQ(stored.corpus_max_jump_mm, r["continuity"]["max_jump_mm"].get<double>());
+  EXPECT_EQ(stored.corpus_rate_hz, fx.sims.front().take.rate_hz);
+  EXPECT_GT(stored.corpus_p99_jump_mm, 1.0);
+  EXPECT_LT(stored.corpus_p99_jump_mm, 25.0);
+  EXPECT_GE(stored.corpus_max_jump_mm, stored.corpus_p99_jump_mm);
   EXPECT_EQ(r["dikeys"]["rejected_unsolved"], 0);
   EXPECT_EQ(r["dikeys"]["rejected_outside"], 0);
   EXPECT_TRUE(r["coverage"]["complete"].get<bool>());

@@ -74,9 +74,15 @@ dict::Dictionary SmallDictionary() {
 TEST(DictionaryFile, RoundTrip) {
   testing::TempDir dir;
   const std::string path = (dir / "d.h5").string();
-  const dict::Dictionary d = SmallDictionary();
+  dict::Dictionary d = SmallDictionary();
+  d.corpus_rate_hz = 120;
+  d.corpus_p99_jump_mm = 15.25;
+  d.corpus_max_jump_mm = 44.5;
   SaveDictionaryFile(path, d);
   const dict::Dictionary r = LoadDictionaryFile(path);
+  EXPECT_EQ(r.corpus_rate_hz, 120);
+  EXPECT_EQ(r.corpus_p99_jump_mm, 15.25);
+  EXPECT_EQ(r.corpus_max_jump_mm, 44.5);
   EXPECT_EQ(r.models_fingerprint, d.models_fingerprint);
   EXPECT_EQ(r.corpus, "c.h5");
   EXPECT_EQ(r.models_file, "m.h5");

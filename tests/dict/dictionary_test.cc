@@ -257,5 +257,33 @@ TEST(Fingerprint, FollowsTheParametersNotTheObject) {
   }
 }
 
+TEST(Continuity, MarkerJumpsAndQuantilesByHand) {
+  // Two markers over three frames: marker 0 moves 3-4-5 (5 mm) then 1 mm;
+  // marker 1 is hidden in frame 1, so it contributes no jump.
+  MarkerArray m(3, 2);
+  auto set = [&](int64_t f, int64_t k, float x, float y, float z) {
+    float* p = m.at(f, k);
+    p[0] = x;
+    p[1] = y;
+    p[2] = z;
+  };
+  set(0, 0, 0, 0, 0);
+  set(1, 0, 3, 4, 0);
+  set(2, 0, 3, 4, 1);
+  set(0, 1, 9, 9, 9);
+  set(2, 1, 0, 0, 0);
+  std::vector<double> jumps;
+  dict::AppendMarkerJumps(m, &jumps);
+  ASSERT_EQ(jumps.size(), 2u);
+  EXPECT_NEAR(jumps[0], 5.0, 1e-6);
+  EXPECT_NEAR(jumps[1], 1.0, 1e-6);
+  std::vector<double> v = {4, 1, 3, 2, 5};  // sorted 1..5: q 0.5 = 3, q 0.99 = 4 + 0.96 = 4.96
+  EXPECT_DOUBLE_EQ(dict::Quantile(v, 0.5), 3.0);
+  EXPECT_NEAR(dict::Quantile(v, 0.99), 4.96, 1e-12);
+  EXPECT_DOUBLE_EQ(dict::Quantile(v, 1.0), 5.0);
+  std::vector<double> none;
+  EXPECT_TRUE(std::isnan(dict::Quantile(none, 0.5)));
+}
+
 }  // namespace
 }  // namespace csw::dict

@@ -45,12 +45,12 @@ TEST(SynthesisPlan, GlobalRuleTargetsMiddleOfConsonantVowelOnsetConsonantOnset) 
   ASSERT_EQ(keys[3].type, KeyType::kConsonantAlone);
   Dictionary d;
   d.dikeys.push_back(Unit(KeyCode{}, KeyCode{keys[1].placement, keys[1].shape}, 0.3, 0.0));  // leave rest: 0.3 s
-  d.dikeys.push_back(Unit(KeyCode{1, 5}, KeyCode{}, 0.45, NAN));                               // reach rest: 0.45 s
+  d.dikeys.push_back(Unit(KeyCode{1, 5}, KeyCode{}, 0.45, NAN));                             // reach rest: 0.45 s
   PlanOptions o;
   o.rule = PhasingRule::kGlobal;
   const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
   ASSERT_EQ(plan.keys.size(), 5u);
-  EXPECT_DOUBLE_EQ(plan.lead_in_s, 0.0);  // first target 0.55 > 0.3
+  EXPECT_DOUBLE_EQ(plan.lead_in_s, 0.0);            // first target 0.55 > 0.3
   EXPECT_NEAR(plan.keys[1].target_s, 0.55, 1e-12);  // middle of [p]
   EXPECT_NEAR(plan.keys[2].target_s, 0.75, 1e-12);  // onset of [i]
   EXPECT_NEAR(plan.keys[3].target_s, 0.90, 1e-12);  // onset of [t]

@@ -49,6 +49,7 @@ struct TakeWork {
   dict::ExtractionStats stats;
   std::vector<dict::DiphoneUnit> diphones;
   dict::ExtractionStats diphone_stats;
+  std::vector<double> jumps;  // frame-to-frame jumps of the reconstructed model markers (mm)
 };
 
 // The phones of the phone tier (IPA, pauses "_"), on the range's clock: those
@@ -200,6 +201,8 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
     w.series.forearm_pose = std::move(h.pose);
     w.series.head_pose = std::move(f.pose);
     w.series.face_params = std::move(f.params);
+    dict::AppendMarkerJumps(f.reconstructed, &w.jumps);
+    dict::AppendMarkerJumps(h.reconstructed, &w.jumps);
     w.units = dict::ExtractDikeys(w.series, options.dikeys, &w.stats);
     w.diphones = dict::ExtractDiphones(w.series, options.dikeys, &w.diphone_stats);
     w.face_input = MarkerArray();
@@ -218,6 +221,14 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
     d.face_parameter_names.clear();
     for (int p = 0; p < face.num_parameters(); ++p) d.face_parameter_names.push_back("face_p" + std::to_string(p + 1));
   }
+  std::vector<double> jumps;
+  for (const auto& wp : work) {
+    jumps.insert(jumps.end(), wp->jumps.begin(), wp->jumps.end());
+    wp->jumps = {};
+  }
+  if (!work.empty()) d.corpus_rate_hz = work.front()->rate_hz;
+  d.corpus_p99_jump_mm = dict::Quantile(jumps, 0.99);
+  d.corpus_max_jump_mm = jumps.empty() ? std::numeric_limits<double>::quiet_NaN() : jumps.back();
   dict::ExtractionStats diphone_total;
   int64_t diphone_frames = 0;
   json takes = json::array();
@@ -271,6 +282,8 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
   r["output"] = options.output;
   r["tier"] = options.tier;
   r["models_fingerprint"] = d.models_fingerprint;
+  r["continuity"] = {
+      {"rate_hz", d.corpus_rate_hz}, {"p99_jump_mm", d.corpus_p99_jump_mm}, {"max_jump_mm", d.corpus_max_jump_mm}};
   r["takes"] = takes;
   r["dikeys"] = {{"successions", total.successions},
                  {"kept", total.kept},
@@ -301,6 +314,14 @@ std::string DictBuildText(const json& r) {
     << k["rejected_unsolved"].get<int>() << " left out for unsolved frames, " << k["rejected_outside"].get<int>()
     << " outside the takes), " << k["frames"].get<int64_t>() << " frames\n";
   o << "models fingerprint " << r["models_fingerprint"].get<std::string>() << "\n";
+  if (r.contains("continuity") && r["continuity"]["p99_jump_mm"].is_number()) {
+    const json& c = r["continuity"];
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "corpus continuity: frame-to-frame marker jumps p99 %.3f mm, max %.3f mm at %.1f Hz\n",
+                  c["p99_jump_mm"].get<double>(), c["max_jump_mm"].get<double>(), c["rate_hz"].get<double>());
+    o << line;
+  }
   const json& c = r["coverage"];
   auto line = [&](const char* what, const char* key, int possible) {
     o << what << " successions: corpus " << c["corpus"][key]["present"].get<int>() << ", dictionary "

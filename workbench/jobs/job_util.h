@@ -1,6 +1,7 @@
 #pragma once
 // Small pieces shared by the jobs: the usage-error type and file-type detection.
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 
@@ -18,5 +19,12 @@ class UsageError : public InvalidInput {
 // "hdf5" (.h5/.hdf5: a corpus or a model file, told apart by its root "format"
 // attribute), or "" when unknown.
 std::string FormatOf(const std::string& path);
+
+// Sentences of a text file (csw simulate --sentences, csw say --text-file):
+// one per line; a trailing CR, blank lines and lines starting with '#' are
+// skipped. Throws IoError when the file cannot be read, InvalidInput naming
+// file:line for a line that is not UTF-8 and naming the file when it holds no
+// sentence.
+std::vector<std::string> ReadSentences(const std::string& path);
 
 }  // namespace csw::jobs

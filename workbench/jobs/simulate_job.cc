@@ -39,19 +39,6 @@ void MoveInto(const fs::path& from, const fs::path& to) {
   }
 }
 
-std::vector<std::string> ReadSentences(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw IoError(file, "cannot open sentence list");
-  std::vector<std::string> out;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (!line.empty() && line[0] != '#') out.push_back(line);
-  }
-  if (out.empty()) throw InvalidInput(file + ": no sentences (one per line)");
-  return out;
-}
-
 }  // namespace
 
 SimulateOptions ToSimulateOptions(const SimulateJobOptions& options) {
