@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <map>
@@ -317,6 +318,75 @@ TEST(ConcatenateDikeys, FallbackChainStillProducesEveryIntendedKey) {
   // through 25 → 48 (frames 110-140), is their midpoint.
   EXPECT_LT(MaxAbsDiff(t.hand_params.row(125), 0.5 * (ShapeValue(5) + ShapeValue(8))), kTol);
   EXPECT_LT(MaxAbsDiff(t.head_pose.row(125), 0.5 * (HeadValue(2) + HeadValue(4))), kTol);
+}
+
+// Largest frame-to-frame Euclidean step of the forearm-in-head translation (mm).
+double MaxTranslationStep(const Eigen::MatrixXd& forearm_in_head) {
+  double worst = 0;
+  for (Eigen::Index f = 1; f < forearm_in_head.rows(); ++f)
+    worst = std::max(worst, (forearm_in_head.row(f).tail(3) - forearm_in_head.row(f - 1).tail(3)).norm());
+  return worst;
+}
+
+TEST(ConcatenateDikeys, FallbackChainWithNoisyUnitsStillProducesEveryIntendedKey) {
+  // The fallback dictionary with every unit three times (0.25, 0.30, 0.35 s),
+  // each end moved by deterministic noise: hand parameters ±0.2, rotations
+  // ±0.005 rad, translations ±3 mm (placements are ≥ 30 mm apart), so no unit
+  // joins its neighbour exactly.
+  uint32_t state = 12345;
+  auto noise = [&state](double scale) {
+    state = state * 1664525u + 1013904223u;  // LCG: the same numbers everywhere
+    return scale * (static_cast<double>(state >> 8) / static_cast<double>(1u << 24) * 2.0 - 1.0);
+  };
+  std::vector<DikeyUnit> units;
+  for (const DikeyUnit& base : FallbackDictionary().dikeys) {
+    for (double duration : {0.25, 0.30, 0.35}) {
+      DikeyUnit u = Dikey(base.from.Text().c_str(), base.to.Text().c_str(), duration);
+      Eigen::RowVectorXd n0(15), n1(15);
+      for (Eigen::Index c = 0; c < 15; ++c) {
+        const double scale = c < 3 ? 0.2 : (c < 6 || (c >= 9 && c < 12)) ? 0.005 : 3.0;
+        n0(c) = noise(scale);
+        n1(c) = noise(scale);
+      }
+      for (Eigen::Index r = 0; r < u.frames(); ++r) {
+        const double a = static_cast<double>(r) / static_cast<double>(u.frames() - 1);
+        const Eigen::RowVectorXd n = (1 - a) * n0 + a * n1;
+        u.hand_params.row(r) += n.head(3);
+        u.forearm_in_head.row(r) += n.segment(3, 6);
+        u.head_pose.row(r) += n.tail(6);
+      }
+      units.push_back(std::move(u));
+    }
+  }
+  const Dictionary d = DikeyDictionary(std::move(units));
+  const auto keys = FallbackKeys();
+  const HandTrack t = ConcatenateDikeys(d, keys, 2.0);
+  ConcatOptions raw;
+  raw.smoothing = false;
+  const HandTrack r = ConcatenateDikeys(d, keys, 2.0, raw);
+  const std::vector<FallbackLevel> levels = {FallbackLevel::kWhole, FallbackLevel::kClosestPlacement,
+                                             FallbackLevel::kTwoStreams, FallbackLevel::kInterpolated,
+                                             FallbackLevel::kWhole};
+  ASSERT_EQ(t.keys.size(), 5u);
+  for (size_t i = 0; i < 5; ++i) EXPECT_EQ(t.keys[i].level, levels[i]) << "slot " << i;
+  EXPECT_EQ(t.keys[1].used_to, K("23"));
+  std::map<int, Eigen::RowVectorXd> shapes, placements;
+  ClassMeans(d, &shapes, &placements);
+  for (const KeyTarget& k : keys) {
+    SCOPED_TRACE("key " + k.code.Text() + " at " + std::to_string(k.target_s));
+    const Eigen::Index f = Frame(k.target_s);
+    EXPECT_EQ(Nearest(shapes, t.hand_params.row(f)), k.code.shape);
+    EXPECT_EQ(Nearest(placements, t.forearm_in_head.row(f).tail(3)), k.code.placement);
+  }
+  // Without smoothing key 33 (level 1) stays at placement 2.
+  EXPECT_EQ(Nearest(placements, r.forearm_in_head.row(Frame(0.8)).tail(3)), 2);
+  const double step_with = MaxTranslationStep(t.forearm_in_head), step_without = MaxTranslationStep(r.forearm_in_head);
+  std::printf("noisy fallback: largest forearm-in-head translation step %.2f mm with smoothing, %.2f mm without\n",
+              step_with, step_without);
+  // Without smoothing the level-1 unit's end (placement 2) jumps 30 mm to the
+  // next unit's start (placement 3).
+  EXPECT_GT(step_without, 25.0);
+  EXPECT_LT(step_with, 0.25 * step_without);
 }
 
 TEST(ConcatenateDikeys, ClosestPlacementAtTheLastKeyStillReachesItsPlacement) {
