@@ -9,6 +9,7 @@
 
 #include "io/c3d/c3d.h"
 #include "tests/testing/testing.h"
+#include "workbench/jobs/import_job.h"
 #include "workbench/jobs/job_util.h"
 
 namespace csw::jobs {
@@ -165,6 +166,33 @@ TEST(VideoJob, ModuleErrorsKeepTheirKind) {
   o.fps = 0;
   EXPECT_THROW(Video(o, progress), UsageError);
   EXPECT_FALSE(fs::exists(dir / "c.mp4"));
+}
+
+TEST(VideoJob, ReadsACorpusTake) {
+  testing::TempDir dir;
+  WriteC3d((dir / "small.c3d").string(), SmallTake());
+  ImportOptions io;
+  io.files = {(dir / "small.c3d").string()};
+  io.corpus = (dir / "c.h5").string();
+  Progress progress;
+  Import(io, progress);
+  VideoOptions o;
+  o.input = io.corpus;
+  o.take = "small";
+  o.output = (dir / "small.mp4").string();
+  o.fps = 30;
+  const json r = Video(o, progress);
+  EXPECT_EQ(r.at("take"), "small");
+  EXPECT_EQ(r.at("frames"), 45);         // 1.5 s × 30
+  EXPECT_EQ(r.at("markerset"), "none");  // imported without one
+  EXPECT_TRUE(fs::exists(dir / "small.mp4"));
+  o.take = "absent";
+  try {
+    Video(o, progress);
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("no take 'absent'"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
