@@ -20,6 +20,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <sstream>
+#include <vector>
 
 #include "core/error.h"
 #include "io/formats/wav.h"
@@ -40,19 +41,31 @@ Eigen::Vector3d Sample(const MarkerArray& m, int64_t f, int64_t j) {
 }
 
 // Mean position of each column over the frames where all of them are seen;
-// empty when no such frame.
+// when no frame has them all, each column's mean over its own visible frames;
+// empty when a column is never seen.
 Eigen::Matrix3Xd MeanPositions(const MarkerArray& m, const std::vector<int>& cols) {
-  Eigen::Matrix3Xd sum = Eigen::Matrix3Xd::Zero(3, static_cast<Eigen::Index>(cols.size()));
+  const Eigen::Index nc = static_cast<Eigen::Index>(cols.size());
+  Eigen::Matrix3Xd sum = Eigen::Matrix3Xd::Zero(3, nc);
   int64_t n = 0;
   for (int64_t f = 0; f < m.frames(); ++f) {
     bool all = true;
     for (int c : cols) all = all && m.Visible(f, c);
     if (!all) continue;
-    for (size_t i = 0; i < cols.size(); ++i) sum.col(static_cast<Eigen::Index>(i)) += Sample(m, f, cols[i]);
+    for (Eigen::Index i = 0; i < nc; ++i) sum.col(i) += Sample(m, f, cols[static_cast<size_t>(i)]);
     ++n;
   }
-  if (n == 0) return {};
-  return sum / static_cast<double>(n);
+  if (n > 0) return sum / static_cast<double>(n);
+  for (Eigen::Index i = 0; i < nc; ++i) {
+    int64_t seen = 0;
+    for (int64_t f = 0; f < m.frames(); ++f) {
+      if (!m.Visible(f, cols[static_cast<size_t>(i)])) continue;
+      sum.col(i) += Sample(m, f, cols[static_cast<size_t>(i)]);
+      ++seen;
+    }
+    if (seen == 0) return {};
+    sum.col(i) /= static_cast<double>(seen);
+  }
+  return sum;
 }
 
 std::vector<int> Bound(const MarkerBinding& b, const std::vector<std::string>& names) {
@@ -73,8 +86,18 @@ std::vector<std::string> ThroatNames(const MarkerSet& set) {
 // The cuer's front view from the marker set's roles, or false.
 bool RoleView(const Take& take, const MarkerSet& set, PointLightView* view) {
   const MarkerBinding b = BindMarkerSet(set, take.marker_names, false, take.name);
-  const std::vector<int> head = Bound(b, set.head_cluster), face = Bound(b, set.face),
-                         throat = Bound(b, ThroatNames(set));
+  // Roles' columns, without markers the take never sees.
+  auto seen = [&](std::vector<int> cols) {
+    std::erase_if(cols, [&](int c) {
+      for (int64_t f = 0; f < take.markers.frames(); ++f) {
+        if (take.markers.Visible(f, c)) return false;
+      }
+      return true;
+    });
+    return cols;
+  };
+  const std::vector<int> head = seen(Bound(b, set.head_cluster)), face = seen(Bound(b, set.face)),
+                         throat = seen(Bound(b, ThroatNames(set)));
   if (head.size() < 3 || face.size() < 3 || throat.empty()) return false;
   std::vector<int> all = head;
   all.insert(all.end(), face.begin(), face.end());

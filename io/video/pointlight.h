@@ -13,7 +13,9 @@
 // head, the lips and jaw in front); the screen's x axis is up × forward (the
 // cuer's left, as a camera facing the cuer sees it), its y axis up. Centroids
 // and plane are of the markers' mean positions over the frames where all are
-// seen. Otherwise the lab's axes: x to the right, z up (the C3D convention).
+// seen (when no frame sees them all, each marker's own mean; markers the take
+// never sees are left out). Otherwise the lab's axes: x to the right, z up
+// (the C3D convention).
 //
 // Scale: one for the whole video, fitted so that every visible sample of
 // every frame fits inside the picture, less a margin.

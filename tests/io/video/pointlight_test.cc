@@ -247,6 +247,23 @@ TEST(PointLight, FrontViewFromTheMarkerSetRoles) {
     EXPECT_LT((v.right - r * Eigen::Vector3d::UnitX()).norm(), 1e-9) << turn_deg << ": " << v.right.transpose();
     // The face is above the throat on the screen (y down).
     EXPECT_LT(v.Project(r * pos[5]).y(), v.Project(r * throat).y());
+    // No frame sees every marker (h1 on even frames only, f1 on odd ones) and a
+    // second throat marker is never seen: each marker's own mean gives the same view.
+    MarkerSet set2 = set;
+    set2.throat.push_back(ThroatMarker{"t2", std::nullopt});
+    Take gaps = t;
+    gaps.marker_names.push_back("t2");
+    gaps.markers.Resize(10, 9);
+    for (int64_t f = 0; f < 10; ++f) {
+      for (int64_t j = 0; j < 8; ++j) {
+        if ((j == 0 && f % 2 == 1) || (j == 3 && f % 2 == 0)) continue;
+        std::copy(t.markers.at(f, j), t.markers.at(f, j) + 3, gaps.markers.at(f, j));
+      }
+    }
+    const PointLightView g = FitPointLightView(gaps, &set2, SmallOptions());
+    EXPECT_EQ(g.how.rfind("marker set 'roles'", 0), 0u) << g.how;
+    EXPECT_LT((g.up - v.up).norm(), 1e-6) << turn_deg;
+    EXPECT_LT((g.right - v.right).norm(), 1e-6) << turn_deg;
   }
 }
 
