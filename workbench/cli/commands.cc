@@ -18,6 +18,7 @@
 #include "workbench/jobs/segment_job.h"
 #include "workbench/jobs/sign_sequence_job.h"
 #include "workbench/jobs/transitions_job.h"
+#include "workbench/jobs/video_job.h"
 
 namespace csw::cli {
 
@@ -433,6 +434,43 @@ class SegmentCommand : public Command {
 
  private:
   jobs::SegmentOptions options_;
+  bool json_ = false;
+};
+
+class VideoCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("video",
+                              "A point-light MP4 of one take's markers seen from the front, with a frame counter; "
+                              "audio muxed by ffmpeg when installed (docs/video.md)");
+    sub_->add_option("input", options_.input, "A C3D file, or a corpus (.h5) with --take")->required();
+    sub_->add_option("--take", options_.take, "The corpus take");
+    sub_->add_option("-o,--output", options_.output, "The MP4 to write")->required();
+    sub_->add_option("--fps", options_.fps, "Video frames per second")->capture_default_str();
+    sub_->add_option("--size", options_.size, "WIDTHxHEIGHT in pixels (even, 64-4096)")->capture_default_str();
+    sub_->add_option("--audio", options_.audio,
+                     "WAV to mux (needs ffmpeg; silent with a warning without it); the video lasts as long");
+    sub_->add_option("--markerset", options_.markerset,
+                     "Marker-set JSON (front view, colours, sticks); default the one the corpus remembers, else "
+                     "none (lab axes)");
+    sub_->add_option("--ffmpeg", options_.ffmpeg, "The ffmpeg program (a path or a name on PATH)")
+        ->capture_default_str();
+    sub_->add_option("--png", options_.png, "Also write one frame as a PNG");
+    sub_->add_option("--png-time", options_.png_time_s, "Time of that frame in seconds")->capture_default_str();
+    sub_->add_flag("--json", json_, "Print the result as JSON");
+  }
+  int Run(Progress& progress) override {
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::Video(options_, progress);
+    if (json_)
+      PrintJson(r);
+    else
+      std::cout << jobs::VideoText(r);
+    return 0;
+  }
+
+ private:
+  jobs::VideoOptions options_;
   bool json_ = false;
 };
 
@@ -920,6 +958,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<InvertCommand>());
   c.push_back(std::make_unique<CleanCommand>());
   c.push_back(std::make_unique<SegmentCommand>());
+  c.push_back(std::make_unique<VideoCommand>());
   c.push_back(std::make_unique<CueCommand>());
   c.push_back(std::make_unique<KeysCommand>());
   c.push_back(std::make_unique<PhasingCommand>());
