@@ -1,0 +1,697 @@
+#include "synth/concatenation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <numeric>
+
+#include "core/error.h"
+
+namespace csw::dict {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string Num(double v, int digits = 3) {
+  char buf[48];
+  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
+  return buf;
+}
+
+// Linear interpolation of matrix rows at a fractional row (clamped).
+Eigen::RowVectorXd SampleRow(const Eigen::MatrixXd& m, double row) {
+  const double last = static_cast<double>(m.rows() - 1);
+  row = std::clamp(row, 0.0, last);
+  const auto r0 = static_cast<Eigen::Index>(std::floor(row));
+  const Eigen::Index r1 = std::min<Eigen::Index>(r0 + 1, m.rows() - 1);
+  const double frac = row - static_cast<double>(r0);
+  if (frac == 0.0) return m.row(r0);
+  return (1.0 - frac) * m.row(r0) + frac * m.row(r1);
+}
+
+// Column standard deviations of row blocks, accumulated (shifted by the
+// first row seen, against cancellation).
+struct ColumnSpread {
+  Eigen::ArrayXd shift, sum, sum_sq;
+  void Add(const Eigen::MatrixXd& block, Eigen::Index col) {
+    const Eigen::Index c = block.cols();
+    if (sum.size() < col + c) {
+      shift.conservativeResize(col + c);
+      sum.conservativeResize(col + c);
+      sum_sq.conservativeResize(col + c);
+      shift.segment(col, c) = block.row(0).transpose().array();
+      sum.segment(col, c).setZero();
+      sum_sq.segment(col, c).setZero();
+    }
+    for (Eigen::Index r = 0; r < block.rows(); ++r) {
+      const Eigen::ArrayXd x = block.row(r).transpose().array() - shift.segment(col, c);
+      sum.segment(col, c) += x;
+      sum_sq.segment(col, c) += x.square();
+    }
+  }
+};
+
+// Per-column factors a_c = sqrt(w_c / Σw) / σ_c, so that the weighted RMS
+// jump of Δ is ‖a ∘ Δ‖. σ_c = the column's standard deviation over `rows`
+// frames (1 when it is not above 1e-12 of the largest, or there is one row).
+Eigen::VectorXd JumpFactors(const ColumnSpread& spread, double rows, const Eigen::VectorXd& weights) {
+  const Eigen::Index c = weights.size();
+  Eigen::VectorXd sigma = Eigen::VectorXd::Ones(c);
+  if (rows > 1) {
+    const Eigen::ArrayXd mean = spread.sum / rows;
+    sigma = ((spread.sum_sq - rows * mean.square()).max(0.0) / (rows - 1)).sqrt().matrix();
+    const double big = sigma.maxCoeff();
+    for (Eigen::Index j = 0; j < c; ++j)
+      if (!(sigma(j) > 1e-12 * big) || !(sigma(j) > 0)) sigma(j) = 1.0;
+  }
+  const double total = weights.sum();
+  Eigen::VectorXd a(c);
+  for (Eigen::Index j = 0; j < c; ++j) a(j) = total > 0 ? std::sqrt(weights(j) / total) / sigma(j) : 0.0;
+  return a;
+}
+
+Eigen::VectorXd Weights(const Eigen::VectorXd& given, Eigen::Index n, const std::string& what) {
+  if (given.size() == 0) return Eigen::VectorXd::Ones(n);
+  if (given.size() != n) {
+    throw InvalidInput(what + " has " + std::to_string(given.size()) + " values, the dictionary " + std::to_string(n) +
+                       " parameters");
+  }
+  return given;
+}
+
+// A running mean of row vectors.
+struct Mean {
+  Eigen::RowVectorXd sum;
+  int count = 0;
+  void Add(const Eigen::RowVectorXd& v) {
+    if (count == 0) sum = Eigen::RowVectorXd::Zero(v.size());
+    sum += v;
+    ++count;
+  }
+  Eigen::RowVectorXd Value() const { return sum / static_cast<double>(count); }
+};
+
+// Viterbi over slots: local[i][c] and join(i, c_prev, c) costs; returns the
+// best path and its total.
+template <typename JoinFn>
+std::vector<int> Viterbi(const std::vector<std::vector<double>>& local, JoinFn join, double* total) {
+  const size_t n = local.size();
+  std::vector<std::vector<double>> cost(n);
+  std::vector<std::vector<int>> back(n);
+  cost[0] = local[0];
+  back[0].assign(local[0].size(), -1);
+  for (size_t i = 1; i < n; ++i) {
+    cost[i].assign(local[i].size(), kInf);
+    back[i].assign(local[i].size(), -1);
+    for (size_t c = 0; c < local[i].size(); ++c) {
+      for (size_t p = 0; p < local[i - 1].size(); ++p) {
+        const double v = cost[i - 1][p] + join(i, static_cast<int>(p), static_cast<int>(c));
+        if (v < cost[i][c]) {
+          cost[i][c] = v;
+          back[i][c] = static_cast<int>(p);
+        }
+      }
+      cost[i][c] += local[i][c];
+    }
+  }
+  std::vector<int> path(n);
+  const auto best = std::min_element(cost[n - 1].begin(), cost[n - 1].end());
+  *total = *best;
+  path[n - 1] = static_cast<int>(best - cost[n - 1].begin());
+  for (size_t i = n - 1; i > 0; --i) path[i - 1] = back[i][static_cast<size_t>(path[i])];
+  return path;
+}
+
+// The indices of `units` with the `keep` smallest duration mismatches
+// (stable: ties keep dictionary order).
+std::vector<int> ClosestInDuration(std::vector<int> units, const std::vector<double>& mismatch, int keep) {
+  std::stable_sort(units.begin(), units.end(),
+                   [&](int a, int b) { return mismatch[static_cast<size_t>(a)] < mismatch[static_cast<size_t>(b)]; });
+  if (static_cast<int>(units.size()) > keep) units.resize(static_cast<size_t>(keep));
+  return units;
+}
+
+// Output frames of the key times, checked.
+std::vector<int64_t> KeyFrames(const std::vector<double>& times, double duration_s, double rate,
+                               const std::string& what) {
+  if (!std::isfinite(duration_s) || duration_s < 0)
+    throw InvalidInput("duration " + Num(duration_s) + " s is not valid");
+  const auto last_frame = static_cast<int64_t>(std::llround(duration_s * rate));
+  std::vector<int64_t> frames;
+  for (size_t i = 0; i < times.size(); ++i) {
+    const double t = times[i];
+    if (!std::isfinite(t)) throw InvalidInput(what + " " + std::to_string(i + 1) + ": time is not finite");
+    if (t < 0 || t > duration_s + 0.5 / rate) {
+      throw InvalidInput(what + " " + std::to_string(i + 1) + ": time " + Num(t) + " s is outside [0, " +
+                         Num(duration_s) + "] s");
+    }
+    if (i > 0 && !(t > times[i - 1])) {
+      throw InvalidInput(what + " " + std::to_string(i + 1) + ": time " + Num(t) + " s is not after the previous (" +
+                         Num(times[i - 1]) + " s)");
+    }
+    // A time up to half a frame past the end lands on the last frame.
+    frames.push_back(std::min(static_cast<int64_t>(std::llround(t * rate)), last_frame));
+  }
+  return frames;
+}
+
+// Writes the slots' frames into `out` (frames × C). sample(i, u) gives slot
+// i's value at u in [0, 1] (u = 0 at its first key frame, 1 at the next);
+// first(i)/last(i) its values at u = 0 and 1. With smoothing, the jump from
+// last(i) to the first value of the next slot that has frames (for the last
+// slot: to end_value(i), the intended end value) is added as u · jump over slot i.
+// Frames before the first key and after the last hold.
+template <typename SampleFn, typename FirstFn, typename LastFn, typename EndFn>
+void Render(const std::vector<int64_t>& key_frames, bool smoothing, SampleFn sample, FirstFn first, LastFn last,
+            EndFn end_value, Eigen::MatrixXd* out) {
+  const size_t slots = key_frames.size() - 1;
+  const int64_t frames = out->rows();
+  std::vector<size_t> written;
+  for (size_t i = 0; i < slots; ++i)
+    if (key_frames[i + 1] > key_frames[i]) written.push_back(i);
+  if (written.empty()) {  // every key on one frame: the first slot's start value
+    const Eigen::RowVectorXd v = first(0);
+    for (Eigen::Index f = 0; f < out->rows(); ++f) out->row(f) = v;
+    return;
+  }
+  for (size_t w = 0; w < written.size(); ++w) {
+    const size_t i = written[w];
+    Eigen::RowVectorXd jump = Eigen::RowVectorXd::Zero(out->cols());
+    if (smoothing) jump = (w + 1 < written.size() ? first(written[w + 1]) : end_value(i)) - last(i);
+    const int64_t f0 = key_frames[i], f1 = key_frames[i + 1];
+    const double n = static_cast<double>(f1 - f0);
+    for (int64_t f = (w == 0 ? f0 : f0 + 1); f <= f1; ++f) {
+      if (f < 0 || f >= frames) continue;
+      const double u = static_cast<double>(f - f0) / n;
+      out->row(f) = sample(i, u) + u * jump;
+    }
+  }
+  const int64_t start = std::clamp<int64_t>(key_frames[written.front()], 0, frames - 1);
+  const int64_t end = std::clamp<int64_t>(key_frames[written.back() + 1], 0, frames - 1);
+  for (int64_t f = 0; f < start; ++f) out->row(f) = out->row(start);
+  for (int64_t f = end + 1; f < frames; ++f) out->row(f) = out->row(end);
+}
+
+// ---------------------------------------------------------------------------
+// Dikeys.
+
+// A dikey unit's row r as one vector [hand P | forearm_in_head 6 | head 6].
+Eigen::RowVectorXd DikeyRow(const DikeyUnit& u, double row) {
+  const Eigen::RowVectorXd h = SampleRow(u.hand_params, row), f = SampleRow(u.forearm_in_head, row),
+                           p = SampleRow(u.head_pose, row);
+  Eigen::RowVectorXd v(h.size() + 12);
+  v << h, f, p;
+  return v;
+}
+
+struct DikeyCandidate {
+  FallbackLevel level = FallbackLevel::kWhole;
+  int shape_unit = -1, pose_unit = -1;  // the same unit for levels 0 and 1
+  KeyCode used_to;
+  double selection = 0;  // RMS duration mismatch (s)
+  // Values at u = 0 and 1, and the intended value at the arriving key (= last
+  // but at level 1, whose forearm-in-head is the intended placement's mean):
+  // the smoothing's target after the last slot.
+  Eigen::RowVectorXd first, last, end;
+};
+
+// Learned from the dictionary: per shape the mean hand parameters, per
+// placement the mean forearm-in-head and head pose, at every key instant
+// (units' first and last rows).
+struct KeyClasses {
+  std::map<int, Mean> shape, placement;
+  void Add(const KeyCode& code, const DikeyUnit& u, Eigen::Index row) {
+    shape[code.shape].Add(u.hand_params.row(row));
+    Eigen::RowVectorXd pose(12);
+    pose << u.forearm_in_head.row(row), u.head_pose.row(row);
+    placement[code.placement].Add(pose);
+  }
+  bool Has(const KeyCode& k) const { return shape.count(k.shape) && placement.count(k.placement); }
+  Eigen::RowVectorXd Of(const KeyCode& k) const {
+    const Eigen::RowVectorXd h = shape.at(k.shape).Value(), p = placement.at(k.placement).Value();
+    Eigen::RowVectorXd v(h.size() + p.size());
+    v << h, p;
+    return v;
+  }
+  // Mean forearm-in-head translation (mm) of a placement.
+  Eigen::Vector3d Translation(int placement_class) const {
+    return placement.at(placement_class).Value().segment(3, 3).transpose();
+  }
+};
+
+void CheckDikeys(const Dictionary& d) {
+  if (d.dikeys.empty()) throw InvalidInput("the dictionary has no dikey units");
+  const Eigen::Index p = d.dikeys.front().hand_params.cols();
+  for (size_t i = 0; i < d.dikeys.size(); ++i) {
+    const DikeyUnit& u = d.dikeys[i];
+    const std::string where =
+        "dikey unit " + std::to_string(i) + " (take '" + u.take + "', " + SuccessionCode(u.from, u.to) + ")";
+    if (u.frames() < 1 || u.hand_params.cols() != p || u.forearm_in_head.rows() != u.frames() ||
+        u.head_pose.rows() != u.frames() || u.forearm_in_head.cols() != 6 || u.head_pose.cols() != 6) {
+      throw InvalidInput(where + ": its series have inconsistent sizes");
+    }
+    if (!u.hand_params.allFinite() || !u.forearm_in_head.allFinite() || !u.head_pose.allFinite()) {
+      throw InvalidInput(where + ": a value is not finite");
+    }
+    if (!std::isfinite(u.duration_s())) throw InvalidInput(where + ": its times are not finite");
+  }
+}
+
+}  // namespace
+
+std::string ConcatOptions::Check() const {
+  if (!(rate_hz > 0) || !std::isfinite(rate_hz)) return "rate_hz must be positive";
+  if (!(selection_weight >= 0) || !std::isfinite(selection_weight)) return "selection_weight must be >= 0";
+  if (!(concatenation_weight >= 0) || !std::isfinite(concatenation_weight)) return "concatenation_weight must be >= 0";
+  if (hand_weights.size() && !(hand_weights.allFinite() && hand_weights.minCoeff() >= 0))
+    return "hand_weights must be finite and >= 0";
+  if (face_weights.size() && !(face_weights.allFinite() && face_weights.minCoeff() >= 0))
+    return "face_weights must be finite and >= 0";
+  if (max_fallback_level < 0 || max_fallback_level > 3) return "max_fallback_level must be in 0-3";
+  if (max_stream_candidates < 1) return "max_stream_candidates must be >= 1";
+  return "";
+}
+
+const char* FallbackLevelName(FallbackLevel level) {
+  switch (level) {
+    case FallbackLevel::kWhole:
+      return "whole";
+    case FallbackLevel::kClosestPlacement:
+      return "closest placement";
+    case FallbackLevel::kTwoStreams:
+      return "two streams";
+    case FallbackLevel::kInterpolated:
+      return "interpolated";
+  }
+  return "?";
+}
+
+double MinimumJerk(double u) {
+  u = std::clamp(u, 0.0, 1.0);
+  return u * u * u * (10.0 + u * (-15.0 + 6.0 * u));
+}
+
+HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& keys, double duration_s,
+                            const ConcatOptions& o) {
+  if (const std::string why = o.Check(); !why.empty()) throw InvalidInput(why);
+  CheckDikeys(d);
+  if (keys.size() < 2)
+    throw InvalidInput("need at least two keys (rest 00 at both ends), got " + std::to_string(keys.size()));
+  for (size_t i = 0; i < keys.size(); ++i) {
+    const KeyCode& k = keys[i].code;
+    if (k.placement < 0 || k.placement > kMaxPlacement || k.shape < 0 || k.shape > kMaxShape)
+      throw InvalidInput("key " + std::to_string(i + 1) + ": not a key code (" + std::to_string(k.placement) + ", " +
+                         std::to_string(k.shape) + ")");
+  }
+  std::vector<double> times;
+  for (const KeyTarget& k : keys) times.push_back(k.target_s);
+  const std::vector<int64_t> key_frames = KeyFrames(times, duration_s, o.rate_hz, "key");
+
+  const Eigen::Index P = d.dikeys.front().hand_params.cols();
+  const Eigen::Index C = P + 12;
+  // Scales: every frame of every unit.
+  ColumnSpread spread;
+  double rows = 0;
+  for (const DikeyUnit& u : d.dikeys) {
+    spread.Add(u.hand_params, 0);
+    spread.Add(u.forearm_in_head, P);
+    spread.Add(u.head_pose, P + 6);
+    rows += static_cast<double>(u.frames());
+  }
+  Eigen::VectorXd w(C);
+  w << Weights(o.hand_weights, P, "hand_weights"), Eigen::VectorXd::Ones(12);
+  const Eigen::VectorXd a = JumpFactors(spread, rows, w);
+  auto jump_cost = [&](const Eigen::RowVectorXd& from, const Eigen::RowVectorXd& to) {
+    return (a.transpose().array() * (to - from).array()).matrix().norm();
+  };
+
+  KeyClasses classes;
+  for (const DikeyUnit& u : d.dikeys) {
+    classes.Add(u.from, u, 0);
+    classes.Add(u.to, u, u.frames() - 1);
+  }
+
+  const size_t slots = keys.size() - 1;
+  std::vector<std::vector<DikeyCandidate>> cands(slots);
+  const int n_units = static_cast<int>(d.dikeys.size());
+  for (size_t i = 0; i < slots; ++i) {
+    const KeyCode k0 = keys[i].code, k1 = keys[i + 1].code;
+    const double target = keys[i + 1].target_s - keys[i].target_s;
+    std::vector<double> mismatch(d.dikeys.size());
+    for (int j = 0; j < n_units; ++j)
+      mismatch[static_cast<size_t>(j)] = d.dikeys[static_cast<size_t>(j)].duration_s() - target;
+    auto whole = [&](const KeyCode& to, FallbackLevel level) {
+      for (int j = 0; j < n_units; ++j) {
+        const DikeyUnit& u = d.dikeys[static_cast<size_t>(j)];
+        if (u.from != k0 || u.to != to) continue;
+        DikeyCandidate c;
+        c.level = level;
+        c.shape_unit = c.pose_unit = j;
+        c.used_to = to;
+        c.selection = std::abs(mismatch[static_cast<size_t>(j)]);
+        c.first = DikeyRow(u, 0);
+        c.last = DikeyRow(u, static_cast<double>(u.frames() - 1));
+        c.end = c.last;
+        if (level == FallbackLevel::kClosestPlacement)
+          c.end.segment(P, 6) = classes.placement.at(k1.placement).Value().head(6);
+        cands[i].push_back(std::move(c));
+      }
+    };
+    std::vector<DikeyCandidate>& list = cands[i];
+    // Level 0: whole dikeys.
+    whole(k1, FallbackLevel::kWhole);
+    // Level 1: the arriving placement replaced by the closest present (same
+    // leaving key, same arriving shape).
+    if (list.empty() && o.max_fallback_level >= 1 && classes.placement.count(k1.placement)) {
+      const Eigen::Vector3d want = classes.Translation(k1.placement);
+      int best = -1;
+      double best_d = kInf;
+      for (const DikeyUnit& u : d.dikeys) {
+        if (u.from != k0 || u.to.shape != k1.shape || u.to.placement == k1.placement) continue;
+        const double dist = (classes.Translation(u.to.placement) - want).norm();
+        if (dist < best_d || (dist == best_d && u.to.placement < best)) {
+          best_d = dist;
+          best = u.to.placement;
+        }
+      }
+      if (best >= 0) whole(KeyCode{best, k1.shape}, FallbackLevel::kClosestPlacement);
+    }
+    // Level 2: two streams.
+    if (list.empty() && o.max_fallback_level >= 2) {
+      std::vector<int> shape_units, pose_units;
+      for (int j = 0; j < n_units; ++j) {
+        const DikeyUnit& u = d.dikeys[static_cast<size_t>(j)];
+        if (u.from.shape == k0.shape && u.to.shape == k1.shape) shape_units.push_back(j);
+        if (u.from.placement == k0.placement && u.to.placement == k1.placement) pose_units.push_back(j);
+      }
+      std::vector<double> abs_mismatch(mismatch.size());
+      for (size_t j = 0; j < mismatch.size(); ++j) abs_mismatch[j] = std::abs(mismatch[j]);
+      shape_units = ClosestInDuration(shape_units, abs_mismatch, o.max_stream_candidates);
+      pose_units = ClosestInDuration(pose_units, abs_mismatch, o.max_stream_candidates);
+      for (int s : shape_units) {
+        for (int p : pose_units) {
+          const DikeyUnit &us = d.dikeys[static_cast<size_t>(s)], &up = d.dikeys[static_cast<size_t>(p)];
+          DikeyCandidate c;
+          c.level = FallbackLevel::kTwoStreams;
+          c.shape_unit = s;
+          c.pose_unit = p;
+          c.used_to = k1;
+          const double ms = mismatch[static_cast<size_t>(s)], mp = mismatch[static_cast<size_t>(p)];
+          c.selection = std::sqrt(0.5 * (ms * ms + mp * mp));
+          c.first = DikeyRow(us, 0);
+          c.first.tail(12) = DikeyRow(up, 0).tail(12);
+          c.last = DikeyRow(us, static_cast<double>(us.frames() - 1));
+          c.last.tail(12) = DikeyRow(up, static_cast<double>(up.frames() - 1)).tail(12);
+          c.end = c.last;
+          list.push_back(std::move(c));
+        }
+      }
+    }
+    // Level 3: minimum-jerk interpolation between the class means.
+    if (list.empty() && o.max_fallback_level >= 3) {
+      for (const KeyCode& k : {k0, k1}) {
+        if (!classes.shape.count(k.shape))
+          throw InvalidInput("key " + k.Text() + ": the dictionary holds no key with shape " + std::to_string(k.shape));
+        if (!classes.placement.count(k.placement))
+          throw InvalidInput("key " + k.Text() + ": the dictionary holds no key with placement " +
+                             std::to_string(k.placement));
+      }
+      DikeyCandidate c;
+      c.level = FallbackLevel::kInterpolated;
+      c.used_to = k1;
+      c.first = classes.Of(k0);
+      c.last = classes.Of(k1);
+      c.end = c.last;
+      c.selection = 0;
+      list.push_back(std::move(c));
+    }
+    if (list.empty()) {
+      throw InvalidInput("key " + std::to_string(i + 2) + " (" + SuccessionCode(k0, k1) + " at " +
+                         Num(keys[i + 1].target_s) + " s): no dikey unit up to fallback level " +
+                         std::to_string(o.max_fallback_level));
+    }
+  }
+
+  std::vector<std::vector<double>> local(slots);
+  for (size_t i = 0; i < slots; ++i)
+    for (const DikeyCandidate& c : cands[i]) local[i].push_back(o.selection_weight * c.selection);
+  HandTrack out;
+  const std::vector<int> path = Viterbi(
+      local,
+      [&](size_t i, int p, int c) {
+        return o.concatenation_weight *
+               jump_cost(cands[i - 1][static_cast<size_t>(p)].last, cands[i][static_cast<size_t>(c)].first);
+      },
+      &out.total_cost);
+
+  auto chosen = [&](size_t i) -> const DikeyCandidate& { return cands[i][static_cast<size_t>(path[i])]; };
+  auto sample = [&](size_t i, double u) -> Eigen::RowVectorXd {
+    const DikeyCandidate& c = chosen(i);
+    if (c.level == FallbackLevel::kInterpolated) return c.first + MinimumJerk(u) * (c.last - c.first);
+    const DikeyUnit& us = d.dikeys[static_cast<size_t>(c.shape_unit)];
+    Eigen::RowVectorXd v = DikeyRow(us, u * static_cast<double>(us.frames() - 1));
+    if (c.pose_unit != c.shape_unit) {
+      const DikeyUnit& up = d.dikeys[static_cast<size_t>(c.pose_unit)];
+      v.tail(12) = DikeyRow(up, u * static_cast<double>(up.frames() - 1)).tail(12);
+    }
+    return v;
+  };
+  auto first = [&](size_t i) -> Eigen::RowVectorXd { return chosen(i).first; };
+  auto last = [&](size_t i) -> Eigen::RowVectorXd { return chosen(i).last; };
+  auto end = [&](size_t i) -> Eigen::RowVectorXd { return chosen(i).end; };
+  const int64_t frames = static_cast<int64_t>(std::llround(duration_s * o.rate_hz)) + 1;
+  Eigen::MatrixXd track(frames, C);
+  Render(key_frames, o.smoothing, sample, first, last, end, &track);
+
+  out.rate_hz = o.rate_hz;
+  out.hand_params = track.leftCols(P);
+  out.forearm_in_head = track.middleCols(P, 6);
+  out.head_pose = track.rightCols(6);
+  for (size_t i = 0; i < slots; ++i) {
+    const DikeyCandidate& c = chosen(i);
+    KeyReport r;
+    r.code = keys[i + 1].code;
+    r.target_s = keys[i + 1].target_s;
+    r.level = c.level;
+    r.used_to = c.used_to;
+    if (c.shape_unit >= 0) r.units.push_back(c.shape_unit);
+    if (c.level == FallbackLevel::kTwoStreams) r.units.push_back(c.pose_unit);
+    out.keys.push_back(std::move(r));
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// Diphones.
+
+namespace {
+
+struct DiphoneCandidate {
+  DiphoneLevel level = DiphoneLevel::kWhole;
+  int left = -1, right = -1;  // the same unit for level 0
+  double selection = 0;       // RMS of the two half-phone duration mismatches (s)
+  double internal = 0;        // jump cost at the phone boundary (half units)
+  Eigen::RowVectorXd first, last, left_at_boundary, right_at_boundary;
+};
+
+// A diphone unit's fractional row at unit time t.
+double UnitRow(const DiphoneUnit& u, double t) {
+  const double span = u.end_s - u.start_s;
+  if (!(span > 0)) return 0.0;
+  return (t - u.start_s) / span * static_cast<double>(u.frames() - 1);
+}
+
+// Normalized position of the phone boundary in a unit (0..1).
+double UnitBoundary(const DiphoneUnit& u) {
+  const double span = u.end_s - u.start_s;
+  if (!(span > 0)) return 0.5;
+  return std::clamp((u.phone1_end_s - u.start_s) / span, 0.0, 1.0);
+}
+
+void CheckDiphones(const Dictionary& d) {
+  if (d.diphones.empty()) throw InvalidInput("the dictionary has no diphone units");
+  const Eigen::Index q = d.diphones.front().face_params.cols();
+  for (size_t i = 0; i < d.diphones.size(); ++i) {
+    const DiphoneUnit& u = d.diphones[i];
+    const std::string where =
+        "diphone unit " + std::to_string(i) + " (take '" + u.take + "', " + u.phone1 + "+" + u.phone2 + ")";
+    if (u.frames() < 1 || u.face_params.cols() != q)
+      throw InvalidInput(where + ": its face parameters have another size");
+    if (!u.face_params.allFinite()) throw InvalidInput(where + ": a value is not finite");
+    if (!std::isfinite(u.start_s) || !std::isfinite(u.end_s) || !std::isfinite(u.phone1_end_s))
+      throw InvalidInput(where + ": its times are not finite");
+  }
+}
+
+}  // namespace
+
+FaceTrack ConcatenateDiphones(const Dictionary& d, const std::vector<PhoneTarget>& phones, double duration_s,
+                              const ConcatOptions& o) {
+  if (const std::string why = o.Check(); !why.empty()) throw InvalidInput(why);
+  CheckDiphones(d);
+  if (phones.size() < 2) throw InvalidInput("need at least two phones, got " + std::to_string(phones.size()));
+  std::vector<double> middles;
+  for (size_t i = 0; i < phones.size(); ++i) {
+    const PhoneTarget& p = phones[i];
+    const std::string where = "phone " + std::to_string(i + 1) + " ('" + p.phone + "')";
+    if (!std::isfinite(p.start_s) || !std::isfinite(p.end_s)) throw InvalidInput(where + ": time is not finite");
+    if (!(p.end_s > p.start_s))
+      throw InvalidInput(where + ": it ends (" + Num(p.end_s) + " s) before it starts (" + Num(p.start_s) + " s)");
+    if (i > 0 && std::abs(p.start_s - phones[i - 1].end_s) > 1e-6)
+      throw InvalidInput(where + ": starts at " + Num(p.start_s) + " s, not where the previous ends (" +
+                         Num(phones[i - 1].end_s) + " s)");
+    middles.push_back(0.5 * (p.start_s + p.end_s));
+  }
+  if (phones.front().start_s < -1e-9 || phones.back().end_s > duration_s + 1e-6)
+    throw InvalidInput("phones span [" + Num(phones.front().start_s) + ", " + Num(phones.back().end_s) +
+                       "] s, outside [0, " + Num(duration_s) + "] s");
+  const std::vector<int64_t> key_frames = KeyFrames(middles, duration_s, o.rate_hz, "phone middle");
+
+  const Eigen::Index Q = d.diphones.front().face_params.cols();
+  ColumnSpread spread;
+  double rows = 0;
+  for (const DiphoneUnit& u : d.diphones) {
+    spread.Add(u.face_params, 0);
+    rows += static_cast<double>(u.frames());
+  }
+  const Eigen::VectorXd a = JumpFactors(spread, rows, Weights(o.face_weights, Q, "face_weights"));
+  auto jump_cost = [&](const Eigen::RowVectorXd& from, const Eigen::RowVectorXd& to) {
+    return (a.transpose().array() * (to - from).array()).matrix().norm();
+  };
+  std::map<std::string, Mean> phone_mean;
+  Mean global;
+  for (const DiphoneUnit& u : d.diphones) {
+    phone_mean[u.phone1].Add(u.face_params.row(0));
+    phone_mean[u.phone2].Add(u.face_params.row(u.frames() - 1));
+    global.Add(u.face_params.row(0));
+    global.Add(u.face_params.row(u.frames() - 1));
+  }
+
+  const size_t slots = phones.size() - 1;
+  const int n_units = static_cast<int>(d.diphones.size());
+  std::vector<std::vector<DiphoneCandidate>> cands(slots);
+  std::vector<double> boundary(slots);  // normalized target boundary per slot
+  for (size_t i = 0; i < slots; ++i) {
+    const std::string &p1 = phones[i].phone, &p2 = phones[i + 1].phone;
+    const double left_target = phones[i].end_s - middles[i], right_target = middles[i + 1] - phones[i].end_s;
+    boundary[i] = left_target / (left_target + right_target);
+    std::vector<DiphoneCandidate>& list = cands[i];
+    std::vector<int> lefts, rights;
+    std::vector<double> left_mis(d.diphones.size()), right_mis(d.diphones.size());
+    for (int j = 0; j < n_units; ++j) {
+      const DiphoneUnit& u = d.diphones[static_cast<size_t>(j)];
+      left_mis[static_cast<size_t>(j)] = (u.phone1_end_s - u.start_s) - left_target;
+      right_mis[static_cast<size_t>(j)] = (u.end_s - u.phone1_end_s) - right_target;
+      if (u.phone1 == p1 && u.phone2 == p2) {
+        DiphoneCandidate c;
+        c.left = c.right = j;
+        const double l = left_mis[static_cast<size_t>(j)], r = right_mis[static_cast<size_t>(j)];
+        c.selection = std::sqrt(0.5 * (l * l + r * r));
+        c.first = u.face_params.row(0);
+        c.last = u.face_params.row(u.frames() - 1);
+        list.push_back(std::move(c));
+      }
+      if (u.phone1 == p1) lefts.push_back(j);
+      if (u.phone2 == p2) rights.push_back(j);
+    }
+    if (list.empty() && o.max_fallback_level >= 1 && !lefts.empty() && !rights.empty()) {
+      std::vector<double> la(left_mis.size()), ra(right_mis.size());
+      for (size_t j = 0; j < la.size(); ++j) {
+        la[j] = std::abs(left_mis[j]);
+        ra[j] = std::abs(right_mis[j]);
+      }
+      lefts = ClosestInDuration(lefts, la, o.max_stream_candidates);
+      rights = ClosestInDuration(rights, ra, o.max_stream_candidates);
+      for (int l : lefts) {
+        for (int r : rights) {
+          const DiphoneUnit &ul = d.diphones[static_cast<size_t>(l)], &ur = d.diphones[static_cast<size_t>(r)];
+          DiphoneCandidate c;
+          c.level = DiphoneLevel::kHalfUnits;
+          c.left = l;
+          c.right = r;
+          const double lm = left_mis[static_cast<size_t>(l)], rm = right_mis[static_cast<size_t>(r)];
+          c.selection = std::sqrt(0.5 * (lm * lm + rm * rm));
+          c.first = ul.face_params.row(0);
+          c.last = ur.face_params.row(ur.frames() - 1);
+          c.left_at_boundary = SampleRow(ul.face_params, UnitRow(ul, ul.phone1_end_s));
+          c.right_at_boundary = SampleRow(ur.face_params, UnitRow(ur, ur.phone1_end_s));
+          c.internal = jump_cost(c.left_at_boundary, c.right_at_boundary);
+          list.push_back(std::move(c));
+        }
+      }
+    }
+    if (list.empty() && o.max_fallback_level >= 2) {
+      DiphoneCandidate c;
+      const bool known = phone_mean.count(p1) && phone_mean.count(p2);
+      if (!known && o.max_fallback_level < 3) {
+        throw InvalidInput("phone " + std::to_string(i + (phone_mean.count(p1) ? 2 : 1)) + " ('" +
+                           (phone_mean.count(p1) ? p2 : p1) + "'): the dictionary holds no diphone with it");
+      }
+      c.level = known ? DiphoneLevel::kInterpolated : DiphoneLevel::kUnknownPhone;
+      c.first = phone_mean.count(p1) ? phone_mean.at(p1).Value() : global.Value();
+      c.last = phone_mean.count(p2) ? phone_mean.at(p2).Value() : global.Value();
+      list.push_back(std::move(c));
+    }
+    if (list.empty()) {
+      throw InvalidInput("phones " + std::to_string(i + 1) + "-" + std::to_string(i + 2) + " (" + p1 + "+" + p2 +
+                         " at " + Num(middles[i]) + " s): no diphone unit up to fallback level " +
+                         std::to_string(o.max_fallback_level));
+    }
+  }
+
+  std::vector<std::vector<double>> local(slots);
+  for (size_t i = 0; i < slots; ++i)
+    for (const DiphoneCandidate& c : cands[i])
+      local[i].push_back(o.selection_weight * c.selection + o.concatenation_weight * c.internal);
+  FaceTrack out;
+  const std::vector<int> path = Viterbi(
+      local,
+      [&](size_t i, int p, int c) {
+        return o.concatenation_weight *
+               jump_cost(cands[i - 1][static_cast<size_t>(p)].last, cands[i][static_cast<size_t>(c)].first);
+      },
+      &out.total_cost);
+  auto chosen = [&](size_t i) -> const DiphoneCandidate& { return cands[i][static_cast<size_t>(path[i])]; };
+  auto sample = [&](size_t i, double u) -> Eigen::RowVectorXd {
+    const DiphoneCandidate& c = chosen(i);
+    if (c.left < 0) return c.first + MinimumJerk(u) * (c.last - c.first);
+    const double bt = boundary[i];
+    const DiphoneUnit &ul = d.diphones[static_cast<size_t>(c.left)], &ur = d.diphones[static_cast<size_t>(c.right)];
+    // Piecewise linear: [0, bt] → [0, β] of the left unit, [bt, 1] → [β, 1] of the right.
+    if (u <= bt) {
+      const double s = bt > 0 ? u / bt : 1.0;
+      const double v = s * UnitBoundary(ul);
+      Eigen::RowVectorXd x = SampleRow(ul.face_params, v * static_cast<double>(ul.frames() - 1));
+      if (c.left != c.right && o.smoothing) x += s * (c.right_at_boundary - c.left_at_boundary);
+      return x;
+    }
+    const double s = bt < 1 ? (u - bt) / (1 - bt) : 1.0;
+    const double beta = UnitBoundary(ur);
+    return SampleRow(ur.face_params, (beta + s * (1 - beta)) * static_cast<double>(ur.frames() - 1));
+  };
+  auto first = [&](size_t i) -> Eigen::RowVectorXd { return chosen(i).first; };
+  auto last = [&](size_t i) -> Eigen::RowVectorXd { return chosen(i).last; };
+  const int64_t frames = static_cast<int64_t>(std::llround(duration_s * o.rate_hz)) + 1;
+  out.face_params.resize(frames, Q);
+  Render(key_frames, o.smoothing, sample, first, last, last, &out.face_params);
+  out.rate_hz = o.rate_hz;
+  for (size_t i = 0; i < slots; ++i) {
+    const DiphoneCandidate& c = chosen(i);
+    DiphoneReport r;
+    r.phone1 = phones[i].phone;
+    r.phone2 = phones[i + 1].phone;
+    r.start_s = middles[i];
+    r.end_s = middles[i + 1];
+    r.level = c.level;
+    if (c.left >= 0) r.units.push_back(c.left);
+    if (c.right >= 0 && c.right != c.left) r.units.push_back(c.right);
+    out.fallback_per_diphone.push_back(static_cast<int>(c.level));
+    out.diphones.push_back(std::move(r));
+  }
+  return out;
+}
+
+}  // namespace csw::dict

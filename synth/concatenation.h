@@ -1,0 +1,137 @@
+#pragma once
+// Selection and concatenation of dictionary units (the seed's §5.1, issue 15
+// item 4): dynamic programming over the multi-represented dikeys of a
+// Dictionary (hand shape, forearm-in-head and head pose trajectories) and over
+// its diphones (face parameters), each chosen unit linearly time-warped onto
+// its slot, with a documented fallback chain when a succession is missing and
+// the seed's anticipatory smoothing (each boundary jump spread linearly over
+// the previous unit). docs/synthesis.md describes the costs and the chain.
+//
+// Pure: no file I/O. Everything (parameter scales, class means, the closeness
+// of placements) is learned from the dictionary itself; nothing depends on
+// the virtual cuer's marker names or proportions.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/labels.h"
+#include "synth/dictionary.h"
+
+namespace csw::dict {
+
+// An intended key and its target time (s) on the output clock; a sequence
+// holds rest 00 at both ends and strictly increasing times.
+struct KeyTarget {
+  KeyCode code;
+  double target_s = 0;
+};
+
+struct ConcatOptions {
+  double rate_hz = 100;  // output frame rate
+  // Selection cost weight × RMS duration mismatch (s): one duration for a
+  // whole dikey, the two streams' for a two-stream dikey, the two half-phone
+  // durations for a diphone.
+  double selection_weight = 1.0;
+  // Concatenation cost weight × weighted RMS jump across a boundary, each
+  // parameter divided by its standard deviation over the dictionary's frames.
+  double concatenation_weight = 1.0;
+  // Per-parameter weights (e.g. the variance each explains): hand_weights
+  // has one per hand parameter (forearm-in-head and head pose columns weigh
+  // 1 each), face_weights one per face parameter; empty = all 1.
+  Eigen::VectorXd hand_weights, face_weights;
+  bool smoothing = true;  // anticipatory smoothing of every boundary jump
+  // Highest fallback level allowed (FallbackLevel, 0-3); a slot that needs a
+  // higher one throws InvalidInput.
+  int max_fallback_level = 3;
+  // Two-stream and half-unit candidates: at most this many units per stream
+  // (the closest in duration), so a slot has at most its square.
+  int max_stream_candidates = 8;
+  std::string Check() const;  // "" or the reason
+};
+
+// How a dikey slot k_i → k_{i+1} was filled.
+enum class FallbackLevel {
+  kWhole = 0,             // units with both key codes
+  kClosestPlacement = 1,  // the seed's: the arriving key's placement replaced by the closest present
+  kTwoStreams = 2,        // hand shape from the shape succession, forearm/head from the placement succession
+  kInterpolated = 3,      // minimum-jerk interpolation between the two keys' class means
+};
+const char* FallbackLevelName(FallbackLevel level);  // "whole", "closest placement", ...
+
+// One slot: the arriving key (code, target time), the level used and the
+// dictionary indices used (Dictionary::dikeys): one unit for levels 0 and 1,
+// {shape unit, pose unit} for level 2, none for level 3.
+struct KeyReport {
+  KeyCode code;
+  double target_s = 0;
+  FallbackLevel level = FallbackLevel::kWhole;
+  std::vector<int> units;
+  KeyCode used_to;  // level 1: the arriving code of the unit used (placement replaced); else = code
+};
+
+struct HandTrack {
+  double rate_hz = 0;
+  // frames = round(duration_s · rate) + 1, row f = time f / rate.
+  Eigen::MatrixXd hand_params;      // frames × P
+  Eigen::MatrixXd forearm_in_head;  // frames × 6 (rx ry rz rad, tx ty tz mm)
+  Eigen::MatrixXd head_pose;        // frames × 6 (head → lab)
+  std::vector<KeyReport> keys;      // one per slot (per arriving key), in order
+  double total_cost = 0;            // of the selected path (selection + concatenation terms)
+  int64_t frames() const { return hand_params.rows(); }
+};
+
+// Selects and concatenates dikeys for `keys` (≥ 2, times strictly
+// increasing in [0, duration_s]). Slot i runs from key frame
+// F_i = round(t_i · rate) to F_{i+1}; its unit is warped linearly so that its
+// first row lands on F_i and its last row on F_{i+1} (the frame F_{i+1}
+// belongs to slot i). Before F_0 and after the last key the end values are
+// held. Throws InvalidInput naming the problem for an empty dictionary, bad
+// times or NaN, weights of the wrong size, a key whose shape or placement the
+// dictionary never holds (when level 3 is needed) or a slot needing a level
+// above options.max_fallback_level.
+HandTrack ConcatenateDikeys(const Dictionary& dictionary, const std::vector<KeyTarget>& keys, double duration_s,
+                            const ConcatOptions& options = {});
+
+// A phone of the target utterance, contiguous with the previous, "_" = pause.
+struct PhoneTarget {
+  std::string phone;
+  double start_s = 0, end_s = 0;
+};
+
+// How a diphone slot was filled.
+enum class DiphoneLevel {
+  kWhole = 0,      // units with both phones
+  kHalfUnits = 1,  // phone 1's second half from a unit with that phone1, phone 2's first half from one with that phone2
+  kInterpolated = 2,  // minimum-jerk interpolation between the two phones' mean face parameters
+  kUnknownPhone = 3,  // as 2, a phone the dictionary never holds replaced by the mean of all phone middles
+};
+
+struct DiphoneReport {
+  std::string phone1, phone2;
+  double start_s = 0, end_s = 0;  // the target phones' middles
+  DiphoneLevel level = DiphoneLevel::kWhole;
+  std::vector<int> units;  // Dictionary::diphones indices: {unit} or {left, right} or {}
+};
+
+struct FaceTrack {
+  double rate_hz = 0;
+  Eigen::MatrixXd face_params;            // frames × Q
+  std::vector<int> fallback_per_diphone;  // = int(diphones[i].level)
+  std::vector<DiphoneReport> diphones;    // one per phone succession
+  double total_cost = 0;
+  int64_t frames() const { return face_params.rows(); }
+};
+
+// Selects and concatenates diphones for `phones` (≥ 2, contiguous, in
+// order, within [0, duration_s]). Slot j runs from the middle of phone j to
+// the middle of phone j+1 and is warped piecewise linearly so that the
+// unit's phone boundary lands on the target's boundary too. Throws as
+// ConcatenateDikeys (no diphones, bad times, NaN, weights' size).
+FaceTrack ConcatenateDiphones(const Dictionary& dictionary, const std::vector<PhoneTarget>& phones, double duration_s,
+                              const ConcatOptions& options = {});
+
+// Minimum-jerk blend 10u³ − 15u⁴ + 6u⁵ of u in [0, 1] (0 → 0, 1 → 1, zero
+// velocity and acceleration at both ends).
+double MinimumJerk(double u);
+
+}  // namespace csw::dict
