@@ -353,15 +353,20 @@ json Score(const ModelRun& run, const std::vector<std::unique_ptr<TakeJob>>& job
 
 // Every frame of every job: take (selection order), frame, model. LoadJobs
 // makes the jobs take by take, one per model (`models` of them) in run order.
+template <typename Visit>
+void ForEachFrameInCsvOrder(const std::vector<std::unique_ptr<TakeJob>>& jobs, size_t models, Visit&& visit) {
+  for (size_t a = 0; a + models <= jobs.size(); a += models) {
+    for (size_t f = 0; f < jobs[a]->frames.size(); ++f) {
+      for (size_t j = a; j < a + models; ++j) visit(jobs[j]->frames[f]);
+    }
+  }
+}
+
 void WriteFramesCsv(const std::vector<std::unique_ptr<TakeJob>>& jobs, size_t models, const std::string& path) {
   std::ofstream out(path);
   if (!out) throw IoError(path, "cannot open for writing");
   out << FrameCsvHeader() << "\n";
-  for (size_t a = 0; a + models <= jobs.size(); a += models) {
-    for (size_t f = 0; f < jobs[a]->frames.size(); ++f) {
-      for (size_t j = a; j < a + models; ++j) out << FrameCsvRow(jobs[j]->frames[f]) << "\n";
-    }
-  }
+  ForEachFrameInCsvOrder(jobs, models, [&](const FrameReport& r) { out << FrameCsvRow(r) << "\n"; });
   out.close();
   if (!out) throw IoError(path, "write failed");
 }
@@ -409,7 +414,9 @@ json WriteFilled(const Corpus& corpus, const std::vector<TakeRange>& ranges,
 
 }  // namespace
 
-json Invert(const InvertOptions& options, Progress& progress) {
+json Invert(const InvertOptions& options, Progress& progress) { return Invert(options, progress, nullptr); }
+
+json Invert(const InvertOptions& options, Progress& progress, std::vector<FrameReport>* frames) {
   if (const std::string why = options.Check(); !why.empty()) throw InvalidInput(why);
   const ModelFile models = LoadModelFile(options.models);
   const Corpus corpus = Corpus::Open(options.corpus);
@@ -444,6 +451,10 @@ json Invert(const InvertOptions& options, Progress& progress) {
   if (!options.frames_csv.empty()) {
     WriteFramesCsv(jobs, runs.size(), options.frames_csv);
     summary["frames_csv"] = options.frames_csv;
+  }
+  if (frames != nullptr) {
+    frames->clear();
+    ForEachFrameInCsvOrder(jobs, runs.size(), [&](const FrameReport& r) { frames->push_back(r); });
   }
   if (options.fill) summary["filled"] = WriteFilled(corpus, ranges, jobs, options, progress);
   return summary;

@@ -71,6 +71,12 @@ std::string FrameCsvHeader();
 std::string FrameCsvRow(const FrameReport& row);
 nlohmann::json FrameJson(const FrameReport& row);
 
+// Invert, also handing back every per-frame report (the rows of
+// --frames-csv, in its order: take by take in selection order, frame by
+// frame, model by model) when `frames` is not null. For the workbench's
+// reconstruction-error inspector.
+nlohmann::json Invert(const InvertOptions& options, Progress& progress, std::vector<FrameReport>* frames);
+
 // The models' reconstruction of one whole take, in the take's column layout:
 // every marker that a model of the file (options.only: "face", "hand", "" =
 // all) reconstructs, NaN elsewhere and where a frame's solve gives nothing.
