@@ -74,6 +74,7 @@ std::vector<ModelErrors> SummariseInversion(const json& summary, const std::vect
         if (!std::isfinite(r->max_error_mm)) continue;
         if (u.worst_frame < 0 || r->max_error_mm > u.worst_frame_error_mm) {
           u.worst_frame = r->frame;
+          u.worst_time_s = r->time_s;
           u.worst_frame_error_mm = r->max_error_mm;
           u.worst_marker = r->max_marker;
         }
@@ -299,11 +300,11 @@ void ErrorInspector::ChooseUtterance(int index) {
                        .arg(QString::fromStdString(u.spec), QString::fromStdString(shown()->kind)));
     return;
   }
-  info_->setText(tr("%1 (%2): mean %3 ± %4 mm; worst frame %5: %6 mm at %7")
+  info_->setText(tr("%1 (%2): mean %3 ± %4 mm; worst frame at t = %5 s: %6 mm at %7")
                      .arg(QString::fromStdString(u.spec), QString::fromStdString(u.role))
                      .arg(u.mean_mm, 0, 'f', 2)
                      .arg(u.sd_mm, 0, 'f', 2)
-                     .arg(u.worst_frame)
+                     .arg(u.worst_time_s, 0, 'f', 3)
                      .arg(u.worst_frame_error_mm, 0, 'f', 2)
                      .arg(QString::fromStdString(u.worst_marker)));
   Refresh();

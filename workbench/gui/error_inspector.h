@@ -46,6 +46,7 @@ struct UtteranceError {
   // The frame (0-based, of the take) with the largest max visible error, -1
   // when no frame has one; that error and its marker.
   int64_t worst_frame = -1;
+  double worst_time_s = 0;  // its time in the take (the window shows frames as numbered in the source file)
   double worst_frame_error_mm = 0;
   std::string worst_marker;
 };

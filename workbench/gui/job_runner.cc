@@ -24,14 +24,18 @@ bool JobRunner::Start(Work work) {
   error_.clear();
   // The sink runs on the worker thread: it forwards at most ~30 updates a second.
   auto last = std::make_shared<std::chrono::steady_clock::time_point>();
-  progress_ = std::make_unique<Progress>([this, last](const std::string& stage, double fraction) {
-    if (hook_) hook_(stage, fraction);
+  // A new stage is always forwarded.
+  auto last_stage = std::make_shared<std::string>();
+  progress_ = std::make_unique<Progress>([this, last, last_stage](const std::string& stage, double fraction) {
     auto now = std::chrono::steady_clock::now();
-    if (now - *last < std::chrono::milliseconds(33) && fraction < 1.0) return;
-    *last = now;
-    QString s = QString::fromStdString(stage);
-    QMetaObject::invokeMethod(
-        this, [this, s, fraction] { emit ProgressChanged(s, fraction); }, Qt::QueuedConnection);
+    if (now - *last >= std::chrono::milliseconds(33) || fraction >= 1.0 || stage != *last_stage) {
+      *last = now;
+      *last_stage = stage;
+      QString s = QString::fromStdString(stage);
+      QMetaObject::invokeMethod(
+          this, [this, s, fraction] { emit ProgressChanged(s, fraction); }, Qt::QueuedConnection);
+    }
+    if (hook_) hook_(stage, fraction);
   });
   thread_ = QThread::create([this] {
     try {

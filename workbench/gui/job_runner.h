@@ -1,7 +1,7 @@
 #pragma once
 // Runs one csw job (any function of a csw::Progress&, e.g. jobs::Fit or
 // jobs::Invert) on a worker thread, as ImportRunner does for the import:
-// progress arrives as queued signals (at most ~30 a second), Cancel() asks the
+// progress arrives as queued signals (at most ~30 a second, and each new stage), Cancel() asks the
 // job to stop (the job's next Progress::Update throws csw::Cancelled), and the
 // outcome is a queued signal. The GUI thread never waits on the job (only the
 // destructor does, after cancelling it).
@@ -34,8 +34,9 @@ class JobRunner : public QObject {
   void Cancel();
   bool running() const { return thread_ != nullptr; }
 
-  // Called on the worker thread at every progress update, before the GUI hears
-  // of it (tests use it to hold the job at a known point; set before Start).
+  // Called on the worker thread at every progress update, after it was queued
+  // for the GUI (when not dropped by the rate limit); tests and the tour use it
+  // to hold the job at a known point. Set it only while no job runs.
   void SetWorkerHook(std::function<void(const std::string& stage, double fraction)> hook) { hook_ = std::move(hook); }
 
  signals:
