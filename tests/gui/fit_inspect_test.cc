@@ -81,14 +81,15 @@ class FitInspectTest : public ::testing::Test {
     dir_ = nullptr;
   }
 
-  std::unique_ptr<MainWindow> OpenWindow() {
+  std::unique_ptr<MainWindow> OpenWindow() { return OpenWindow(corpus_); }
+  std::unique_ptr<MainWindow> OpenWindow(const std::string& corpus) {
     auto w = std::make_unique<MainWindow>(QString::fromStdString((*dir_ / "settings.ini").string()));
     w->playback()->SetAudioEnabled(false);
     w->resize(1400, 900);
     w->show();
     QApplication::setActiveWindow(w.get());
     EXPECT_TRUE(QTest::qWaitForWindowActive(w.get()));
-    EXPECT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+    EXPECT_TRUE(w->OpenCorpus(QString::fromStdString(corpus)));
     return w;
   }
 
@@ -221,11 +222,34 @@ TEST_F(FitInspectTest, FitCancelledMidwayLeavesTheModelFileThenRunsToTheEnd) {
 }
 
 TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
+  // The three sentences and a foreign take (two markers of another marker
+  // set), which the inspector leaves out by itself.
+  const std::string corpus = (*dir_ / "mixed.h5").string();
+  {
+    const Corpus sentences = Corpus::Open(corpus_);
+    CorpusTransaction tx(corpus);
+    for (const TakeSummary& t : sentences.Takes()) tx.WriteTake(sentences.LoadTake(t.name));
+    Take foreign;
+    foreign.name = "zz_foreign";
+    foreign.rate_hz = 100;
+    foreign.marker_names = {"a", "b"};
+    foreign.markers.Resize(20, 2);
+    for (int64_t f = 0; f < 20; ++f)
+      for (int k = 0; k < 2; ++k) {
+        float* p = foreign.markers.at(f, k);
+        p[0] = static_cast<float>(k);
+        p[1] = static_cast<float>(f);
+        p[2] = 0.0f;
+      }
+    tx.WriteTake(foreign);
+    tx.Commit();
+  }
+  const std::vector<std::string> sentences = {"sentence_1", "sentence_2", "sentence_3"};
   // A face model fitted on the first two sentences (the third is held out).
   const std::string models = (*dir_ / "inspect-models.h5").string();
   {
     jobs::FitOptions fit;
-    fit.corpus = corpus_;
+    fit.corpus = corpus;
     fit.kind = "face";
     fit.takes = {"sentence_1", "sentence_2"};
     fit.output = models;
@@ -235,8 +259,9 @@ TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
   // Expected, from the job's own reports: the utterance with the largest mean
   // visible error, and its frame with the largest max visible error.
   jobs::InvertOptions invert;
-  invert.corpus = corpus_;
+  invert.corpus = corpus;
   invert.models = models;
+  invert.takes = sentences;
   std::vector<jobs::FrameReport> frames;
   Progress progress;
   const nlohmann::json summary = jobs::Invert(invert, progress, &frames);
@@ -261,7 +286,7 @@ TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
   // Not the frame the window shows anyway.
   ASSERT_GT(worst_frame, 0);
 
-  auto w = OpenWindow();
+  auto w = OpenWindow(corpus);
   ErrorInspector* inspector = w->error_inspector();
   QSignalSpy finished(inspector, &ErrorInspector::Finished);
   ASSERT_TRUE(w->InspectErrors(QString::fromStdString(models)));
@@ -269,6 +294,8 @@ TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
   EXPECT_TRUE(inspector->running());
   ASSERT_TRUE(finished.wait(180000));
   ASSERT_EQ(finished.at(0).at(0).toString(), "succeeded") << w->log()->entries().back().toStdString();
+  EXPECT_EQ(inspector->skipped(), QStringList{"zz_foreign"});
+  EXPECT_TRUE(w->log()->entries().filter("Left out of the error inspection").size() == 1);
 
   // Bars in selection order, one per sentence, as the job's summary lists them.
   ASSERT_NE(inspector->shown(), nullptr);

@@ -172,13 +172,21 @@ ErrorInspector::ErrorInspector(LogPanel* log, QWidget* parent) : QWidget(parent)
     done();
     results_ = std::move(pending_);
     pending_.clear();
+    skipped_ = pending_skipped_;
+    pending_skipped_.clear();
     model_combo_->clear();
     for (const ModelErrors& m : results_)
       model_combo_->addItem(QString::fromStdString(m.kind), QString::fromStdString(m.kind));
     shown_ = results_.empty() ? -1 : 0;
     source_->setText(tr("%1 on %2").arg(QFileInfo(models_).fileName(), QFileInfo(corpus_).fileName()));
     Refresh();
-    if (log_ != nullptr) log_->Info(tr("Reconstruction errors of %1 computed on %2").arg(models_, corpus_));
+    if (log_ != nullptr) {
+      log_->Info(tr("Reconstruction errors of %1 computed on %2").arg(models_, corpus_));
+      if (!skipped_.isEmpty()) {
+        log_->Warning(tr("Left out of the error inspection (they lack the models' markers): %1")
+                          .arg(skipped_.join(QStringLiteral(", "))));
+      }
+    }
     emit Finished(QStringLiteral("succeeded"));
   });
   connect(runner_, &JobRunner::Canceled, this, [this, done] {
@@ -228,9 +236,9 @@ bool ErrorInspector::Start(const QString& corpus, const QString& models, const Q
   jobs::InvertOptions options;
   options.corpus = corpus.toStdString();
   options.models = models.toStdString();
-  options.worst_frames = 0;
-  for (const QString& t : takes)
-    options.takes.push_back(t.toStdString());  // the inspector ranks frames itself from the per-frame reports
+  options.worst_frames = 0;  // the inspector ranks frames itself from the per-frame reports
+  for (const QString& t : takes) options.takes.push_back(t.toStdString());
+  options.skip_unbound = takes.isEmpty();
   if (const std::string why = options.Check(); !why.empty()) {
     if (log_ != nullptr) log_->Error(tr("Error inspection not started: %1").arg(QString::fromStdString(why)));
     return false;
@@ -242,6 +250,11 @@ bool ErrorInspector::Start(const QString& corpus, const QString& models, const Q
     std::vector<jobs::FrameReport> frames;
     const json summary = jobs::Invert(options, progress, &frames);
     pending_ = SummariseInversion(summary, frames);
+    pending_skipped_.clear();
+    if (summary.contains("skipped_takes")) {
+      for (const json& k : summary["skipped_takes"])
+        pending_skipped_ << QString::fromStdString(k["take"].get<std::string>());
+    }
   });
   if (!started) return false;
   progress_->setValue(0);

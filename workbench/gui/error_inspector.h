@@ -79,9 +79,10 @@ class ErrorInspector : public QWidget {
   ~ErrorInspector() override;
 
   // Inverts every model of `models` on `takes` of `corpus` (take selections,
-  // take_selection.h; empty = every take but generated fill versions) in the
-  // background; false (and a log line) when one runs. Every selected take must
-  // hold the models' markers (else the run fails, naming the take).
+  // take_selection.h) in the background; false (and a log line) when one
+  // runs. Every take given must hold the models' markers (else the run fails,
+  // naming the take); with none given, every take but generated fill versions
+  // that holds them (the others are named in the log and in skipped()).
   bool Start(const QString& corpus, const QString& models, const QStringList& takes = {});
   void Cancel();
   bool running() const;
@@ -89,6 +90,8 @@ class ErrorInspector : public QWidget {
   QString models_file() const { return models_; }
 
   const std::vector<ModelErrors>& results() const { return results_; }
+  // Takes of the last run left out for lacking the models' markers.
+  const QStringList& skipped() const { return skipped_; }
   // The model shown ("face" / "hand"); false when the results have none.
   bool ShowModel(const QString& kind);
   const ModelErrors* shown() const;
@@ -137,6 +140,8 @@ class ErrorInspector : public QWidget {
   QLabel* info_ = nullptr;
   std::vector<ModelErrors> pending_;  // written by the worker, read after it finished
   std::vector<ModelErrors> results_;
+  QStringList pending_skipped_;  // written by the worker, read after it finished
+  QStringList skipped_;
   int shown_ = -1;
   int chosen_ = -1;
   // Reconstruction of the shown take.

@@ -31,6 +31,10 @@ struct InvertOptions {
   // none; columns in docs/models.md, "Per-frame errors").
   std::string frames_csv;
   int worst_frames = 20;  // frames listed per model in the JSON's "worst_frames" (by max visible error)
+  // Leave out selected takes that lack a marker of some model (each listed in
+  // the summary's "skipped_takes" with the reason) instead of failing; an error
+  // still when no take is left. For the workbench's error inspector.
+  bool skip_unbound = false;
   InversionOptions inversion;
   std::string Check() const;
 };
