@@ -221,6 +221,49 @@ TEST_F(FitInspectTest, FitCancelledMidwayLeavesTheModelFileThenRunsToTheEnd) {
   EXPECT_FALSE(LoadModelFile(models.string()).hand.has_value());
 }
 
+// The configuration: a wrong one is refused before any job starts (the reason
+// in the status line and the log); a loaded file is what the fit uses, as
+// `csw fit --config FILE` would.
+TEST_F(FitInspectTest, FitDialogChecksAndUsesTheConfiguration) {
+  auto w = OpenWindow();
+  FitDialog* dialog = w->ShowFitDialog();
+  dialog->SetKind(QStringLiteral("face"));
+  const fs::path models = *dir_ / "config-models.h5";
+  dialog->SetOutput(QString::fromStdString(models.string()));
+  dialog->SetConfigText(QStringLiteral(R"({"face": {"components": "six"}})"));
+  QTest::mouseClick(dialog->fit_button(), Qt::LeftButton);
+  EXPECT_FALSE(dialog->running());
+  EXPECT_TRUE(dialog->status_label()->text().startsWith("Not started: "))
+      << dialog->status_label()->text().toStdString();
+  EXPECT_TRUE(w->log()->entries().back().startsWith("error: Fit not started"))
+      << w->log()->entries().back().toStdString();
+  EXPECT_FALSE(fs::exists(models));
+
+  const fs::path config = *dir_ / "three.json";
+  {
+    std::ofstream out(config);
+    out << R"({"format": "csw-model-config", "face": {"components": 3}})";
+  }
+  ASSERT_TRUE(dialog->LoadConfigFile(QString::fromStdString(config.string())));
+  QSignalSpy finished(dialog, &FitDialog::FitFinished);
+  QTest::mouseClick(dialog->fit_button(), Qt::LeftButton);
+  ASSERT_TRUE(dialog->running()) << dialog->status_label()->text().toStdString();
+  ASSERT_TRUE(finished.wait(180000));
+  ASSERT_EQ(finished.at(0).at(0).toString(), "succeeded") << w->log()->entries().back().toStdString();
+  // The same fit by the job itself.
+  jobs::FitOptions fit;
+  fit.corpus = corpus_;
+  fit.kind = "face";
+  fit.config = config.string();
+  fit.output = (*dir_ / "config-models-job.h5").string();
+  Progress progress;
+  const nlohmann::json expected = jobs::Fit(fit, progress);
+  ASSERT_TRUE(expected.contains("face"));
+  EXPECT_EQ(expected["face"]["parameters"].size(), 3u);  // not the default 6
+  EXPECT_EQ(dialog->result()["face"]["parameters"], expected["face"]["parameters"]);
+  EXPECT_EQ(LoadModelFile(models.string()).face->info.config_json, LoadModelFile(fit.output).face->info.config_json);
+}
+
 TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
   // The three sentences and a foreign take (two markers of another marker
   // set), which the inspector leaves out by itself.
