@@ -331,6 +331,31 @@ TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
 
   auto w = OpenWindow(corpus);
   ErrorInspector* inspector = w->error_inspector();
+  // An inspection cancelled midway (its Cancel button) shows nothing.
+  {
+    auto hold = std::make_shared<FitHold>();
+    struct Guard {
+      std::shared_ptr<FitHold> hold;
+      ~Guard() {
+        if (hold->reached.load()) hold->Release();
+      }
+    } guard{hold};
+    InstallHold(inspector->runner(), hold);
+    QSignalSpy cancelled(inspector, &ErrorInspector::Finished);
+    ASSERT_TRUE(w->InspectErrors(QString::fromStdString(models)));
+    ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, 60000));
+    auto* cancel = inspector->findChild<QPushButton*>("errorCancelButton");
+    ASSERT_NE(cancel, nullptr);
+    EXPECT_TRUE(cancel->isVisible());
+    QTest::mouseClick(cancel, Qt::LeftButton);
+    hold->Release();
+    ASSERT_TRUE(cancelled.wait(60000));
+    EXPECT_EQ(cancelled.at(0).at(0).toString(), "canceled");
+    EXPECT_TRUE(inspector->results().empty());
+    EXPECT_EQ(inspector->BarCount(), 0);
+    EXPECT_FALSE(cancel->isVisible());
+    inspector->runner()->SetWorkerHook(nullptr);
+  }
   QSignalSpy finished(inspector, &ErrorInspector::Finished);
   ASSERT_TRUE(w->InspectErrors(QString::fromStdString(models)));
   EXPECT_TRUE(w->errors_dock()->isVisible());

@@ -13,6 +13,7 @@
 #include <QTableWidget>
 #include <QVBoxLayout>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "workbench/gui/job_runner.h"
@@ -28,17 +29,25 @@ double Stat(const json& stats, const char* key) {
   return stats.contains(key) && stats[key].is_number() ? stats[key].get<double>() : std::nan("");
 }
 
-// A table cell that sorts by its number.
-QTableWidgetItem* NumberItem(double v, int decimals) {
-  auto* item = new QTableWidgetItem();
-  if (std::isfinite(v)) {
-    item->setData(Qt::DisplayRole, QString::number(v, 'f', decimals).toDouble());
-  } else {
-    item->setData(Qt::DisplayRole, QString());
+// A table cell showing a number with fixed decimals and sorting by its exact
+// value (not the rounded text: equal-looking cells keep their true order);
+// empty when not finite, sorted below every number.
+class NumberItem : public QTableWidgetItem {
+ public:
+  NumberItem(double v, int decimals)
+      : QTableWidgetItem(std::isfinite(v) ? QString::number(v, 'f', decimals) : QString()), value_(v) {
+    setTextAlignment(Qt::AlignRight | Qt::AlignVCenter);
   }
-  item->setTextAlignment(Qt::AlignRight | Qt::AlignVCenter);
-  return item;
-}
+  bool operator<(const QTableWidgetItem& other) const override {
+    const auto* o = dynamic_cast<const NumberItem*>(&other);
+    if (o == nullptr) return QTableWidgetItem::operator<(other);
+    return Key(value_) < Key(o->value_);
+  }
+
+ private:
+  static double Key(double v) { return std::isfinite(v) ? v : -std::numeric_limits<double>::infinity(); }
+  double value_;
+};
 
 }  // namespace
 
@@ -406,11 +415,11 @@ void ErrorInspector::Refresh() {
     const int r = static_cast<int>(i);
     table_->setItem(r, 0, new QTableWidgetItem(QString::fromStdString(e.marker)));
     table_->setItem(r, 1, new QTableWidgetItem(QString::fromStdString(e.role)));
-    table_->setItem(r, 2, NumberItem(e.mean_mm, 2));
-    table_->setItem(r, 3, NumberItem(e.sd_mm, 2));
-    table_->setItem(r, 4, NumberItem(e.p99_mm, 2));
-    table_->setItem(r, 5, NumberItem(e.max_mm, 2));
-    table_->setItem(r, 6, NumberItem(static_cast<double>(e.count), 0));
+    table_->setItem(r, 2, new NumberItem(e.mean_mm, 2));
+    table_->setItem(r, 3, new NumberItem(e.sd_mm, 2));
+    table_->setItem(r, 4, new NumberItem(e.p99_mm, 2));
+    table_->setItem(r, 5, new NumberItem(e.max_mm, 2));
+    table_->setItem(r, 6, new NumberItem(static_cast<double>(e.count), 0));
   }
   table_->setSortingEnabled(true);
   table_->sortByColumn(2, Qt::DescendingOrder);
