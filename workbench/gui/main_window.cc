@@ -28,7 +28,9 @@
 
 #include "core/error.h"
 #include "workbench/gui/corpus_browser.h"
+#include "workbench/gui/error_inspector.h"
 #include "workbench/gui/figure_export.h"
+#include "workbench/gui/fit_dialog.h"
 #include "workbench/gui/import_runner.h"
 #include "workbench/gui/label_counts.h"
 #include "workbench/gui/label_lane.h"
@@ -137,6 +139,24 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   resizeDocks({takes_dock_}, {430}, Qt::Horizontal);
   resizeDocks({takes_dock_, counts_dock_}, {520, 180}, Qt::Vertical);
 
+  error_inspector_ = new ErrorInspector(log_, this);
+  errors_dock_ = new QDockWidget(tr("Reconstruction errors"), this);
+  errors_dock_->setObjectName("errorsDock");
+  errors_dock_->setWidget(error_inspector_);
+  addDockWidget(Qt::RightDockWidgetArea, errors_dock_);
+  errors_dock_->hide();
+  connect(error_inspector_, &ErrorInspector::UtteranceChosen, this, &MainWindow::OnUtteranceChosen);
+  connect(error_inspector_, &ErrorInspector::Finished, this, [this](const QString& outcome) {
+    if (outcome == QStringLiteral("succeeded") && take_) error_inspector_->ReconstructTake(take_);
+  });
+  connect(error_inspector_, &ErrorInspector::ReconstructionReady, this, [this](const QString& take) {
+    if (take_ && QString::fromStdString(take_->name) == take)
+      marker_view_->SetReconstruction(error_inspector_->reconstruction());
+  });
+  connect(this, &MainWindow::TakeShown, this, [this] {
+    if (!error_inspector_->results().empty()) error_inspector_->ReconstructTake(take_);
+  });
+
   playback_ = new Playback(this);
   import_runner_ = new ImportRunner(this);
   frame_label_ = new QLabel(this);
@@ -226,8 +246,14 @@ void MainWindow::BuildMenus() {
   edit->addSeparator();
   edit->addAction(tr("&Label Lane"), QKeySequence(Qt::CTRL | Qt::Key_L), this, [this] { label_lane_->setFocus(); });
 
+  QMenu* models = menuBar()->addMenu(tr("&Models"));
+  models->addAction(tr("&Fit Model…"), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_F), this,
+                    [this] { ShowFitDialog(); });
+  models->addAction(tr("&Inspect Reconstruction Errors…"), this, &MainWindow::ChooseAndInspectErrors);
+
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(takes_dock_->toggleViewAction());
+  view->addAction(errors_dock_->toggleViewAction());
   view->addAction(plots_dock_->toggleViewAction());
   view->addAction(log_dock_->toggleViewAction());
   view->addAction(counts_dock_->toggleViewAction());
@@ -304,6 +330,8 @@ void MainWindow::closeEvent(QCloseEvent* event) {
     std::fprintf(stderr, "csw-workbench: %s\n", qPrintable(m));
   }
   import_runner_->Cancel();
+  if (fit_dialog_ != nullptr) fit_dialog_->CancelFit();
+  error_inspector_->Cancel();
   SaveLayout();
   event->accept();
 }
@@ -619,6 +647,55 @@ void MainWindow::ChooseMarkerSet() {
   QString path = QFileDialog::getOpenFileName(this, tr("Load Marker Set"), settings_->value("lastDir").toString(),
                                               tr("Marker set (*.json);;All files (*)"));
   if (!path.isEmpty()) LoadMarkerSetFile(path);
+}
+
+FitDialog* MainWindow::ShowFitDialog() {
+  if (fit_dialog_ == nullptr) {
+    fit_dialog_ = new FitDialog(log_, this);
+    connect(fit_dialog_, &FitDialog::ModelSaved, this, [this](const QString& path) {
+      settings_->setValue("lastModelFile", path);
+      statusBar()->showMessage(tr("Model saved to %1").arg(path), 5000);
+    });
+  }
+  if (!fit_dialog_->running()) {
+    // The takes the browser lists (read when the corpus was opened): no file access here.
+    QStringList takes;
+    for (int row = 0; row < browser_->take_count(); ++row) takes << browser_->Cell(row, CorpusBrowser::kName);
+    fit_dialog_->SetCorpus(corpus_path(), takes);
+    if (marker_set_) fit_dialog_->SetMarkerSetFile(settings_->value("markerSet").toString());
+  }
+  fit_dialog_->show();
+  fit_dialog_->raise();
+  return fit_dialog_;
+}
+
+bool MainWindow::InspectErrors(const QString& model_file, const QStringList& takes) {
+  if (!corpus_) {
+    log_->Error(tr("Open a corpus before inspecting reconstruction errors."));
+    return false;
+  }
+  marker_view_->SetReconstruction(nullptr);
+  if (!error_inspector_->Start(corpus_path(), model_file, takes)) return false;
+  errors_dock_->show();
+  errors_dock_->raise();
+  return true;
+}
+
+void MainWindow::ChooseAndInspectErrors() {
+  QString start = settings_->value("lastModelFile").toString();
+  if (start.isEmpty()) start = settings_->value("lastDir").toString();
+  const QString path = QFileDialog::getOpenFileName(this, tr("Inspect Reconstruction Errors of a Model File"), start,
+                                                    tr("csw model file (*.h5);;All files (*)"));
+  if (path.isEmpty()) return;
+  settings_->setValue("lastModelFile", path);
+  InspectErrors(path);
+}
+
+void MainWindow::OnUtteranceChosen(const QString& take, qint64 frame) {
+  if (!SelectTake(take)) return;
+  playback_->Pause();
+  playback_->Seek(frame);
+  log_->Info(tr("%1: worst frame %2").arg(take).arg(frame + take_->first_frame));
 }
 
 void MainWindow::ShowImportDialog() {

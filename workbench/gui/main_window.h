@@ -22,6 +22,8 @@ class QSettings;
 namespace csw::gui {
 
 class CorpusBrowser;
+class ErrorInspector;
+class FitDialog;
 class ImportRunner;
 class LabelCountsPanel;
 class LabelLane;
@@ -60,6 +62,16 @@ class MainWindow : public QMainWindow {
   // (and a log line) when there is no label there, no marker lane or no minimum.
   static constexpr double kSnapWindowS = 0.25;
   bool SnapLabelToSpeedMinimum();
+  // Shows the model-fit dialog (not modal) for the open corpus's takes.
+  FitDialog* ShowFitDialog();
+  // Inverts the models of `model_file` on the open corpus in the background and
+  // shows the reconstruction-error inspector dock; false (and a log line) when
+  // no corpus is open or an inspection runs. Clicking an utterance's bar shows
+  // that take at its worst frame; the 3D view then draws the models'
+  // reconstruction of the shown take with its observed markers.
+  // `takes`: take selections (take_selection.h), empty = every take but
+  // generated fill versions.
+  bool InspectErrors(const QString& model_file, const QStringList& takes = {});
 
   QString corpus_path() const;
   std::shared_ptr<const Take> take() const { return take_; }
@@ -84,6 +96,9 @@ class MainWindow : public QMainWindow {
   QDockWidget* takes_dock() const { return takes_dock_; }
   QDockWidget* plots_dock() const { return plots_dock_; }
   QDockWidget* log_dock() const { return log_dock_; }
+  FitDialog* fit_dialog() const { return fit_dialog_; }
+  ErrorInspector* error_inspector() const { return error_inspector_; }
+  QDockWidget* errors_dock() const { return errors_dock_; }
 
  signals:
   void TakeShown(const QString& name);
@@ -106,6 +121,8 @@ class MainWindow : public QMainWindow {
   void ChooseAndExportPlot();
   void ChooseAndExport3d();
   void ChooseMarkerSet();
+  void ChooseAndInspectErrors();
+  void OnUtteranceChosen(const QString& take, qint64 frame);
   void UpdateTitle();
 
   std::unique_ptr<QSettings> settings_;
@@ -132,6 +149,9 @@ class MainWindow : public QMainWindow {
   QDockWidget* takes_dock_ = nullptr;
   QDockWidget* plots_dock_ = nullptr;
   QDockWidget* log_dock_ = nullptr;
+  FitDialog* fit_dialog_ = nullptr;
+  ErrorInspector* error_inspector_ = nullptr;
+  QDockWidget* errors_dock_ = nullptr;
   QMenu* recent_menu_ = nullptr;
   QLabel* frame_label_ = nullptr;
   QAction* play_action_ = nullptr;

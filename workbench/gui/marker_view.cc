@@ -103,6 +103,7 @@ MarkerView::MarkerView(QWidget* parent) : QWidget(parent) {
 
 void MarkerView::SetTake(std::shared_ptr<const Take> take, const MarkerSet* marker_set) {
   take_ = std::move(take);
+  reconstruction_.reset();
   sticks_.clear();
   clusters_.clear();
   cluster_names_.clear();
@@ -234,6 +235,32 @@ void MarkerView::SelectMarker(int marker) {
   if (!take_ || marker < 0 || marker >= take_->markers.markers()) marker = -1;
   selected_ = marker;
   update();
+}
+
+void MarkerView::SetReconstruction(std::shared_ptr<const MarkerArray> reconstruction) {
+  if (reconstruction && (!take_ || reconstruction->frames() != take_->frames() ||
+                         reconstruction->markers() != take_->markers.markers())) {
+    reconstruction.reset();
+  }
+  reconstruction_ = std::move(reconstruction);
+  update();
+}
+
+std::optional<Projected> MarkerView::ProjectReconstructed(int64_t marker, QSizeF viewport) const {
+  if (!reconstruction_ || frame_ >= reconstruction_->frames()) return std::nullopt;
+  const float* p = reconstruction_->at(frame_, marker);
+  if (IsMissing(p[0])) return std::nullopt;
+  return Project(camera_, viewport, {p[0], p[1], p[2]});
+}
+
+int MarkerView::DrawnReconstructedCount(bool observed_visible) const {
+  if (!take_ || !reconstruction_ || frame_ >= take_->frames()) return 0;
+  int n = 0;
+  for (int64_t k = 0; k < take_->markers.markers(); ++k) {
+    if (take_->markers.Visible(frame_, k) != observed_visible) continue;
+    n += ProjectReconstructed(k, QSizeF(size())).has_value();
+  }
+  return n;
 }
 
 std::array<double, 3> MarkerView::Point(int64_t marker) const {
@@ -374,6 +401,52 @@ void MarkerView::Render(QPainter& painter, QSize size) const {
     painter.drawEllipse(d.p.pos, r, r);
   }
   painter.setBrush(Qt::NoBrush);
+
+  // The model reconstruction: a ring joined to the observed marker where it is
+  // seen, a filled diamond where it is missing.
+  int reconstructed_visible = 0, reconstructed_missing = 0;
+  if (reconstruction_) {
+    const QColor ring(80, 230, 140), filled(255, 150, 40);
+    for (int64_t k = 0; k < m.markers(); ++k) {
+      auto r = ProjectReconstructed(k, vp);
+      if (!r) continue;
+      if (auto o = project(k)) {
+        painter.setPen(QPen(ring, 1.0));
+        painter.drawLine(o->pos, r->pos);
+        painter.setPen(QPen(ring, 1.6));
+        painter.setBrush(Qt::NoBrush);
+        painter.drawEllipse(r->pos, 5.5, 5.5);
+        ++reconstructed_visible;
+      } else {
+        const QPointF c = r->pos;
+        const double h = 5.5;
+        const QPointF diamond[4] = {c + QPointF(0, -h), c + QPointF(h, 0), c + QPointF(0, h), c + QPointF(-h, 0)};
+        painter.setPen(QPen(QColor(10, 10, 10), 1));
+        painter.setBrush(filled);
+        painter.drawPolygon(diamond, 4);
+        painter.setBrush(Qt::NoBrush);
+        ++reconstructed_missing;
+      }
+    }
+    // Legend, lower right above the projection name.
+    const double x = size.width() - 250, y = size.height() - 66;
+    painter.setPen(QPen(QColor(10, 10, 10), 1));
+    painter.setBrush(MarkerColor(true));
+    painter.drawEllipse(QPointF(x, y), 4, 4);
+    painter.setBrush(Qt::NoBrush);
+    painter.setPen(QPen(ring, 1.6));
+    painter.drawEllipse(QPointF(x, y + 16), 5.5, 5.5);
+    const QPointF d(x, y + 32);
+    const QPointF diamond[4] = {d + QPointF(0, -5.5), d + QPointF(5.5, 0), d + QPointF(0, 5.5), d + QPointF(-5.5, 0)};
+    painter.setPen(QPen(QColor(10, 10, 10), 1));
+    painter.setBrush(filled);
+    painter.drawPolygon(diamond, 4);
+    painter.setBrush(Qt::NoBrush);
+    painter.setPen(QColor(235, 235, 235));
+    painter.drawText(QPointF(x + 12, y + 4), tr("observed"));
+    painter.drawText(QPointF(x + 12, y + 20), tr("reconstructed, marker seen (%1)").arg(reconstructed_visible));
+    painter.drawText(QPointF(x + 12, y + 36), tr("reconstructed, marker missing (%1)").arg(reconstructed_missing));
+  }
 
   // Heads-up text: take, frame, time, visibility, selection.
   painter.setPen(QColor(235, 235, 235));

@@ -57,6 +57,18 @@ class MarkerView : public QWidget {
   void SetFrame(int64_t frame);
   int64_t frame() const { return frame_; }
 
+  // A model reconstruction of the shown take, in the take's column layout (NaN
+  // where none; jobs::ModelReconstruction), drawn with the observed markers:
+  // observed markers as filled discs, reconstructed ones as rings joined to
+  // their observed marker by a line where it is seen (reconstructed-visible),
+  // and as filled orange diamonds where it is missing (reconstructed-missing).
+  // nullptr clears; cleared by SetTake; ignored when its size does not match.
+  void SetReconstruction(std::shared_ptr<const MarkerArray> reconstruction);
+  bool has_reconstruction() const { return reconstruction_ != nullptr; }
+  // Reconstructed markers drawn at the current frame whose observed marker is
+  // visible (observed_visible) or missing.
+  int DrawnReconstructedCount(bool observed_visible) const;
+
   Camera& camera() { return camera_; }
   const Camera& camera() const { return camera_; }
   void SetPerspective(bool on);
@@ -98,7 +110,10 @@ class MarkerView : public QWidget {
  private:
   std::array<double, 3> Point(int64_t marker) const;
 
+  std::optional<Projected> ProjectReconstructed(int64_t marker, QSizeF viewport) const;
+
   std::shared_ptr<const Take> take_;
+  std::shared_ptr<const MarkerArray> reconstruction_;
   int64_t frame_ = 0;
   Camera camera_;
   std::vector<std::pair<int, int>> sticks_;  // take columns

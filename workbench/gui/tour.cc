@@ -7,14 +7,21 @@
 #include <QDockWidget>
 #include <QEventLoop>
 #include <QFile>
+#include <QLabel>
 #include <QTimer>
+#include <atomic>
 #include <fstream>
+#include <memory>
+#include <semaphore>
 
 #include "core/error.h"
 #include "io/corpus/corpus.h"
 #include "workbench/gui/corpus_browser.h"
 #include "workbench/gui/demo_take.h"
+#include "workbench/gui/error_inspector.h"
+#include "workbench/gui/fit_dialog.h"
 #include "workbench/gui/import_runner.h"
+#include "workbench/gui/job_runner.h"
 #include "workbench/gui/label_lane.h"
 #include "workbench/gui/label_session.h"
 #include "workbench/gui/log_panel.h"
@@ -157,6 +164,123 @@ QStringList RunTour(const TourOptions& options) {
   window.OpenCorpus(damaged);
   window.browser()->SelectTake(QString::fromStdString(demo.name));
   written << Shot(&window, options.out_dir, QStringLiteral("%1-damaged-file.png").arg(shot, 2, 10, QChar('0')));
+  // 8. Models > Fit Model...: a face model fitted in the background on the
+  // virtual cuer's takes (the synthetic one and the imported sentences but the
+  // last, which is held out), shot while the fit runs; then the
+  // reconstruction-error inspector on the corpus, its worst utterance
+  // clicked, and the 3D view with observed and reconstructed markers.
+  QStringList cuer_takes{QString::fromStdString(demo.name)};
+  for (const QString& t : imported)
+    if (t.startsWith(QStringLiteral("sentence_"))) cuer_takes << t;
+  if (cuer_takes.size() >= 3) {
+    const QString models = QDir(options.work_dir).filePath("demo.models.h5");
+    QFile::remove(models);
+    FitDialog* fit = window.ShowFitDialog();
+    fit->SetKind(QStringLiteral("face"));
+    fit->SetOutput(models);
+    fit->SetCheckedTakes(cuer_takes.mid(0, cuer_takes.size() - 1));
+    fit->move(window.geometry().center() - QPoint(fit->width() / 2, fit->height() / 2));
+    // Hold the worker once, a quarter into the fit proper, for the picture.
+    struct Hold {
+      std::atomic<bool> held{false}, done{false};
+      std::binary_semaphore resume{0};
+    };
+    auto hold = std::make_shared<Hold>();
+    fit->runner()->SetWorkerHook([hold](const std::string& stage, double fraction) {
+      if (hold->done.load() || stage == "loading takes" || fraction < 0.25 || fraction >= 1.0) return;
+      hold->done = true;
+      hold->held = true;
+      hold->resume.acquire();
+    });
+    QString outcome;
+    QEventLoop loop;
+    auto finished = QObject::connect(fit, &FitDialog::FitFinished, &loop, [&](const QString& o) {
+      outcome = o;
+      loop.quit();
+    });
+    if (!fit->StartFit()) throw Error("tour: the fit did not start: " + fit->status_label()->text().toStdString());
+    QTimer poll;
+    QObject::connect(&poll, &QTimer::timeout, &loop, [&] {
+      if (hold->held.load()) loop.quit();
+    });
+    poll.start(20);
+    loop.exec();
+    poll.stop();
+    if (hold->held.load()) {
+      Settle(300);  // the queued progress reaches the dialog
+      written << Shot(fit, options.out_dir, QStringLiteral("fit-dialog.png"));
+      hold->resume.release();
+      if (outcome.isEmpty()) loop.exec();
+    } else {
+      written << Shot(fit, options.out_dir, QStringLiteral("fit-dialog.png"));
+    }
+    QObject::disconnect(finished);
+    fit->runner()->SetWorkerHook(nullptr);
+    if (outcome != QStringLiteral("succeeded")) throw Error("tour: the face fit " + outcome.toStdString());
+    fit->hide();
+
+    ErrorInspector* inspector = window.error_inspector();
+    QString inspected;
+    QObject::connect(inspector, &ErrorInspector::Finished, &loop, [&](const QString& o) {
+      inspected = o;
+      loop.quit();
+    });
+    window.browser()->SelectTake(cuer_takes.front());  // a take the model's markers bind
+    window.resizeDocks({window.errors_dock()}, {620}, Qt::Horizontal);
+    // Every take: Facial-Sing, which lacks the model's markers, is left out (and named in the log).
+    if (!window.InspectErrors(models)) throw Error("tour: the error inspection did not start");
+    loop.exec();
+    if (inspected != QStringLiteral("succeeded")) throw Error("tour: the error inspection " + inspected.toStdString());
+    const ModelErrors* errors = inspector->shown();
+    if (errors == nullptr || errors->utterances.empty()) throw Error("tour: no reconstruction errors to show");
+    size_t worst = 0;
+    for (size_t i = 1; i < errors->utterances.size(); ++i)
+      if (errors->utterances[i].mean_mm > errors->utterances[worst].mean_mm) worst = i;
+    const QString worst_take = QString::fromStdString(errors->utterances[worst].take);
+    inspector->ChooseUtterance(static_cast<int>(worst));
+    QTimer timeout;
+    timeout.setSingleShot(true);
+    QObject::connect(&timeout, &QTimer::timeout, &loop, &QEventLoop::quit);
+    QObject::connect(inspector, &ErrorInspector::ReconstructionReady, &loop, [&](const QString& take) {
+      if (take == worst_take) loop.quit();
+    });
+    timeout.start(120000);
+    if (!window.marker_view()->has_reconstruction()) loop.exec();
+    MarkerView* view = window.marker_view();
+    view->SetYUp(false);
+    view->ResetView();  // facing the talker
+    view->Zoom(2.0);
+    written << Shot(&window, options.out_dir, QStringLiteral("error-inspector.png"));
+    // The face close up at the frame of that take where the model fills the
+    // most missing markers, so that both reconstructed styles show.
+    const std::shared_ptr<const Take> shown = window.take();
+    const std::shared_ptr<const MarkerArray> recon = inspector->reconstruction();
+    if (shown && recon && recon->frames() == shown->frames() && recon->markers() == shown->markers.markers()) {
+      int64_t best = -1;
+      int most = 0;
+      for (int64_t f = 0; f < shown->frames(); ++f) {
+        int n = 0;
+        for (int64_t k = 0; k < shown->markers.markers(); ++k)
+          n += !shown->markers.Visible(f, k) && !IsMissing(recon->at(f, k)[0]);
+        if (n > most) {
+          most = n;
+          best = f;
+        }
+      }
+      if (best >= 0) window.playback()->Seek(best);
+    }
+    view->ResetView();
+    view->Orbit(-30, 5);
+    view->Zoom(2.6);
+    const int chin = shown ? static_cast<int>(shown->MarkerIndex("CHIN")) : -1;
+    if (chin >= 0) {
+      if (auto pos = view->MarkerScreenPos(chin))
+        view->Pan(view->width() / 2.0 - pos->x(), view->height() / 2.0 - 60 - pos->y());
+    }
+    written << Shot(view, options.out_dir, QStringLiteral("reconstruction-3d.png"));
+    window.errors_dock()->hide();
+  }
+
   window.close();
   return written;
 }

@@ -162,12 +162,20 @@ std::vector<std::unique_ptr<ModelRun>> MakeRuns(const ModelFile& models, const I
 // Loads every (model, take) pair; hides samples; reads the truth.
 std::vector<std::unique_ptr<TakeJob>> LoadJobs(const Corpus& corpus, const std::vector<TakeRange>& ranges,
                                                const std::vector<std::unique_ptr<ModelRun>>& runs,
-                                               const InvertOptions& options, Progress& progress) {
+                                               const InvertOptions& options, Progress& progress, json* skipped) {
   std::vector<std::unique_ptr<TakeJob>> jobs;
   for (size_t i = 0; i < ranges.size(); ++i) {
     progress.Update("loading takes", static_cast<double>(i) / static_cast<double>(ranges.size()));
     const Take take = corpus.LoadTake(ranges[i].take);
     const std::string where = corpus.path() + ": take '" + ranges[i].take + "'";
+    if (options.skip_unbound) {
+      try {
+        for (const auto& run : runs) BindNames(run->set, take.marker_names, run->names, where);
+      } catch (const InvalidInput& e) {
+        skipped->push_back({{"take", ranges[i].spec}, {"reason", e.what()}});
+        continue;
+      }
+    }
     Take clean;
     if (!options.truth.empty()) {
       const fs::path p = fs::path(options.truth) / (ranges[i].take + ".clean.c3d");
@@ -353,15 +361,20 @@ json Score(const ModelRun& run, const std::vector<std::unique_ptr<TakeJob>>& job
 
 // Every frame of every job: take (selection order), frame, model. LoadJobs
 // makes the jobs take by take, one per model (`models` of them) in run order.
+template <typename Visit>
+void ForEachFrameInCsvOrder(const std::vector<std::unique_ptr<TakeJob>>& jobs, size_t models, Visit&& visit) {
+  for (size_t a = 0; a + models <= jobs.size(); a += models) {
+    for (size_t f = 0; f < jobs[a]->frames.size(); ++f) {
+      for (size_t j = a; j < a + models; ++j) visit(jobs[j]->frames[f]);
+    }
+  }
+}
+
 void WriteFramesCsv(const std::vector<std::unique_ptr<TakeJob>>& jobs, size_t models, const std::string& path) {
   std::ofstream out(path);
   if (!out) throw IoError(path, "cannot open for writing");
   out << FrameCsvHeader() << "\n";
-  for (size_t a = 0; a + models <= jobs.size(); a += models) {
-    for (size_t f = 0; f < jobs[a]->frames.size(); ++f) {
-      for (size_t j = a; j < a + models; ++j) out << FrameCsvRow(jobs[j]->frames[f]) << "\n";
-    }
-  }
+  ForEachFrameInCsvOrder(jobs, models, [&](const FrameReport& r) { out << FrameCsvRow(r) << "\n"; });
   out.close();
   if (!out) throw IoError(path, "write failed");
 }
@@ -409,14 +422,27 @@ json WriteFilled(const Corpus& corpus, const std::vector<TakeRange>& ranges,
 
 }  // namespace
 
-json Invert(const InvertOptions& options, Progress& progress) {
+json Invert(const InvertOptions& options, Progress& progress) { return Invert(options, progress, nullptr); }
+
+json Invert(const InvertOptions& options, Progress& progress, std::vector<FrameReport>* frames) {
   if (const std::string why = options.Check(); !why.empty()) throw InvalidInput(why);
   const ModelFile models = LoadModelFile(options.models);
   const Corpus corpus = Corpus::Open(options.corpus);
-  const std::vector<TakeRange> ranges = SelectCorpusTakes(corpus, options.takes);
+  std::vector<TakeRange> ranges = SelectCorpusTakes(corpus, options.takes);
   if (!options.figures.empty()) figures::Require();  // before any work
   const std::vector<std::unique_ptr<ModelRun>> runs = MakeRuns(models, options);
-  const std::vector<std::unique_ptr<TakeJob>> jobs = LoadJobs(corpus, ranges, runs, options, progress);
+  json skipped = json::array();
+  const std::vector<std::unique_ptr<TakeJob>> jobs = LoadJobs(corpus, ranges, runs, options, progress, &skipped);
+  if (!skipped.empty()) {
+    if (jobs.empty()) {
+      throw InvalidInput("no selected take holds the models' markers: " + skipped.front()["reason"].get<std::string>());
+    }
+    std::erase_if(ranges, [&](const TakeRange& r) {
+      for (const json& k : skipped)
+        if (k["take"] == r.spec) return true;
+      return false;
+    });
+  }
 
   // Invert in parallel over (model, take) pairs.
   ParallelFor(jobs.size(), options.threads, "inverting", progress, [&](size_t j, Progress& item) {
@@ -437,6 +463,7 @@ json Invert(const InvertOptions& options, Progress& progress) {
   summary["corpus"] = options.corpus;
   summary["models"] = options.models;
   summary["figures"] = json::array();
+  if (options.skip_unbound) summary["skipped_takes"] = skipped;
   for (const auto& run : runs) {
     json scores = Score(*run, jobs, options, summary);
     summary[run->kind] = std::move(scores);
@@ -444,6 +471,10 @@ json Invert(const InvertOptions& options, Progress& progress) {
   if (!options.frames_csv.empty()) {
     WriteFramesCsv(jobs, runs.size(), options.frames_csv);
     summary["frames_csv"] = options.frames_csv;
+  }
+  if (frames != nullptr) {
+    frames->clear();
+    ForEachFrameInCsvOrder(jobs, runs.size(), [&](const FrameReport& r) { frames->push_back(r); });
   }
   if (options.fill) summary["filled"] = WriteFilled(corpus, ranges, jobs, options, progress);
   return summary;

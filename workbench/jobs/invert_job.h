@@ -31,6 +31,10 @@ struct InvertOptions {
   // none; columns in docs/models.md, "Per-frame errors").
   std::string frames_csv;
   int worst_frames = 20;  // frames listed per model in the JSON's "worst_frames" (by max visible error)
+  // Leave out selected takes that lack a marker of some model (each listed in
+  // the summary's "skipped_takes" with the reason) instead of failing; an error
+  // still when no take is left. For the workbench's error inspector.
+  bool skip_unbound = false;
   InversionOptions inversion;
   std::string Check() const;
 };
@@ -70,6 +74,12 @@ struct FrameReport {
 std::string FrameCsvHeader();
 std::string FrameCsvRow(const FrameReport& row);
 nlohmann::json FrameJson(const FrameReport& row);
+
+// Invert, also handing back every per-frame report (the rows of
+// --frames-csv, in its order: take by take in selection order, frame by
+// frame, model by model) when `frames` is not null. For the workbench's
+// reconstruction-error inspector.
+nlohmann::json Invert(const InvertOptions& options, Progress& progress, std::vector<FrameReport>* frames);
 
 // The models' reconstruction of one whole take, in the take's column layout:
 // every marker that a model of the file (options.only: "face", "hand", "" =
