@@ -458,11 +458,12 @@ PointLightResult WritePointLightVideo(const Take& take, const MarkerSet* set, co
 }
 
 void SavePointLightFrame(const Take& take, const MarkerSet* set, int64_t frame, const std::string& png_path,
-                         const PointLightOptions& options) {
+                         const PointLightOptions& options, int64_t total_frames) {
   if (const std::string why = options.Check(); !why.empty()) throw InvalidInput(why);
   const PointLightView view = FitPointLightView(take, set, options);
   const Drawing d = MakeDrawing(take, set, options.sticks);
-  const cv::Mat img = Render(take, d, view, frame, options, PointLightFrameCount(take.duration_s(), options.fps));
+  const int64_t frames = total_frames > 0 ? total_frames : PointLightFrameCount(take.duration_s(), options.fps);
+  const cv::Mat img = Render(take, d, view, frame, options, frames);
   bool ok = false;
   try {
     ok = cv::imwrite(png_path, img);

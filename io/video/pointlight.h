@@ -117,9 +117,11 @@ PointLightResult WritePointLightVideo(const Take& take, const MarkerSet* set, co
                                       const PointLightOptions& options, const std::string& wav_path = "",
                                       Progress* progress = nullptr);
 
-// One video frame as a PNG (for documentation). Errors as above.
+// One video frame as a PNG (for documentation); its counter reads
+// "frame K/total_frames" (0 = the take's count, as for a video without audio).
+// Errors as above.
 void SavePointLightFrame(const Take& take, const MarkerSet* set, int64_t frame, const std::string& png_path,
-                         const PointLightOptions& options);
+                         const PointLightOptions& options, int64_t total_frames = 0);
 
 // The program a name refers to: itself when it contains '/', else the first
 // executable PATH entry; "" when none.

@@ -14,7 +14,7 @@
 
 namespace csw::video {
 
-inline constexpr int kVideoApiVersion = 1;
+inline constexpr int kVideoApiVersion = 2;
 
 // kError: another csw::Error (a damaged WAV); kOther: anything else (an internal error).
 enum class ErrorKind { kNone = 0, kInvalidInput, kIoError, kError, kCancelled, kOther };
@@ -30,7 +30,7 @@ struct VideoApi {
                             const PointLightOptions& options, const std::string& wav_path, Progress* progress,
                             PointLightResult* result) = nullptr;
   VideoError (*save_frame)(const Take& take, const MarkerSet* set, int64_t frame, const std::string& png_path,
-                           const PointLightOptions& options) = nullptr;
+                           const PointLightOptions& options, int64_t total_frames) = nullptr;
 };
 
 }  // namespace csw::video

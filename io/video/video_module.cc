@@ -35,8 +35,8 @@ VideoError WriteVideo(const Take& take, const MarkerSet* set, const std::string&
 }
 
 VideoError SaveFrame(const Take& take, const MarkerSet* set, int64_t frame, const std::string& png_path,
-                     const PointLightOptions& options) {
-  return Guard([&] { SavePointLightFrame(take, set, frame, png_path, options); });
+                     const PointLightOptions& options, int64_t total_frames) {
+  return Guard([&] { SavePointLightFrame(take, set, frame, png_path, options, total_frames); });
 }
 
 }  // namespace

@@ -182,7 +182,7 @@ json Video(const VideoOptions& options, Progress& progress) {
   if (!options.png.empty()) {
     const int64_t frame =
         std::min<int64_t>(std::llround(options.png_time_s * options.fps), std::max<int64_t>(0, r.frames - 1));
-    Rethrow(api.save_frame(take, set ? &*set : nullptr, frame, options.png, o));
+    Rethrow(api.save_frame(take, set ? &*set : nullptr, frame, options.png, o, r.frames));  // the video's counter
     out["png"] = {{"path", options.png}, {"frame", frame}};
   }
   return out;
