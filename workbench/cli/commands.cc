@@ -15,6 +15,7 @@
 #include "workbench/jobs/model_jobs.h"
 #include "workbench/jobs/ohman_job.h"
 #include "workbench/jobs/phasing_job.h"
+#include "workbench/jobs/say_job.h"
 #include "workbench/jobs/segment_job.h"
 #include "workbench/jobs/sign_sequence_job.h"
 #include "workbench/jobs/transitions_job.h"
@@ -728,6 +729,53 @@ class DictCommand : public Command {
   bool json_ = false;
 };
 
+class SayCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("say",
+                              "Text-to-cued-speech synthesis (docs/synthesis.md): French text -> speech.wav, "
+                              "cues.TextGrid, markers.c3d, pointlight.mp4 from a dictionary (csw dict build)");
+    sub_->add_option("text", options_.texts, "French sentence(s) to synthesise");
+    sub_->add_option("--text-file", options_.text_file, "A file of sentences, one per line ('#' = comment)");
+    sub_->add_option("--dict", options_.dict, "Dictionary file (csw dict build)")->required();
+    sub_->add_option("--models", options_.models, "The model file the dictionary was built with")->required();
+    sub_->add_option("-o,--output", options_.output,
+                     "Output folder (created; one sub-folder per sentence when several)")
+        ->required();
+    sub_->add_option("--rate", options_.rate_wpm,
+                     "Speaking rate (espeak-ng words per minute); default: the corpus's mean phone duration");
+    sub_->add_option("--phasing", options_.phasing,
+                     "Key timing: dikey (the phasing each dikey stored) or global (the seed's rule)")
+        ->capture_default_str();
+    sub_->add_option("--frame-rate", options_.rate_hz, "Marker frame rate (Hz); 0 = the corpus's")
+        ->capture_default_str();
+    sub_->add_option("--fps", options_.fps, "Point-light video frame rate")->capture_default_str();
+    sub_->add_flag("--no-video", no_video_, "Do not write pointlight.mp4");
+    sub_->add_flag("--check", options_.check,
+                   "Score the synthesised markers with the key recogniser, measure continuity and timing");
+    sub_->add_option("--keys", options_.keys, "Key model file (csw keys train), for --check");
+    sub_->add_option("--corpus-phasing", options_.corpus_phasing,
+                     "JSON of csw phasing --json on the corpus, the timing --check compares with");
+    sub_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    options_.video = !no_video_;
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::Say(options_, progress);
+    if (json_) {
+      PrintJson(r);
+    } else {
+      std::cout << jobs::SayText(r);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::SayOptions options_;
+  bool no_video_ = false;
+  bool json_ = false;
+};
+
 class CoarticCommand : public Command {
  public:
   void Register(CLI::App& app) override {
@@ -964,6 +1012,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<PhasingCommand>());
   c.push_back(std::make_unique<CoarticCommand>());
   c.push_back(std::make_unique<DictCommand>());
+  c.push_back(std::make_unique<SayCommand>());
   c.push_back(std::make_unique<TransitionsCommand>());
   c.push_back(std::make_unique<SignSequenceCommand>());
   c.push_back(std::make_unique<PackCommand>());

@@ -210,4 +210,11 @@ std::string VideoText(const json& r) {
   return s.str();
 }
 
+PointLightResult WriteTakeVideo(const Take& take, const MarkerSet* set, const std::string& path,
+                                const PointLightOptions& options, const std::string& wav_path, Progress* progress) {
+  PointLightResult r;
+  Rethrow(Api().write_video(take, set, path, options, wav_path, progress, &r));
+  return r;
+}
+
 }  // namespace csw::jobs

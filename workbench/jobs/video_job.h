@@ -12,7 +12,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "core/markerset.h"
 #include "core/progress.h"
+#include "core/take.h"
+#include "io/video/pointlight.h"
 
 namespace csw::jobs {
 
@@ -39,5 +42,10 @@ bool ParseVideoSize(const std::string& text, int* width, int* height);
 nlohmann::json Video(const VideoOptions& options, Progress& progress);
 // The default text output.
 std::string VideoText(const nlohmann::json& result);
+
+// WritePointLightVideo (io/video/pointlight.h) through the video module, for
+// the jobs that draw takes they made (csw say). Errors as Video's.
+PointLightResult WriteTakeVideo(const Take& take, const MarkerSet* set, const std::string& path,
+                                const PointLightOptions& options, const std::string& wav_path, Progress* progress);
 
 }  // namespace csw::jobs

@@ -1,0 +1,72 @@
+#pragma once
+// The text-to-cued-speech synthesizer (issue 15 item 5, the seed's §5): an
+// utterance's phones and audio (synth/phonetics: espeak-ng) → keys (LfPC,
+// synth/cueing) → the timing plan (synth/synthesis_plan) → dikeys and
+// diphones selected and concatenated (synth/concatenation) → parameter
+// tracks → every model marker (synth/marker_synthesis). The dikeys drive the
+// hand, the forearm relative to the head and the head itself; the diphones
+// drive the face. docs/synthesis.md describes each step.
+//
+// Pure: no file I/O (csw say, workbench/jobs/say_job, writes the files).
+#include <string>
+#include <vector>
+
+#include "core/take.h"
+#include "synth/concatenation.h"
+#include "synth/dictionary.h"
+#include "synth/marker_synthesis.h"
+#include "synth/phonetics.h"
+#include "synth/synthesis_plan.h"
+
+namespace csw {
+
+struct FaceModel;
+struct HandModel;
+
+namespace dict {
+
+struct SynthesisOptions {
+  PlanOptions plan;
+  // concat.rate_hz is the output frame rate; 0 = the dictionary's corpus rate
+  // (Dictionary::corpus_rate_hz, else its first unit's rate).
+  ConcatOptions concat = [] {
+    ConcatOptions c;
+    c.rate_hz = 0;
+    return c;
+  }();
+  std::string Check() const;  // "" or the reason
+};
+
+struct Synthesis {
+  SynthesisPlan plan;                    // key targets on the output clock
+  std::vector<Phone> phones;             // the utterance's phones on the output clock (lead-in added)
+  std::vector<PhoneTarget> face_phones;  // what the face track was built for (pauses "_" at both ends)
+  HandTrack hand;                        // dikeys: hand parameters, forearm in head, head pose
+  FaceTrack face;          // diphones: face parameters (zeros = the mean face when the dictionary has none)
+  ParameterTracks tracks;  // the tracks the markers come from
+  // Every model marker at the output rate, its tiers: "words", "phones"
+  // (IPA, pauses "_"), "keys" (point tier: each key's target, code "PS"),
+  // "placement_targets" (the same times), "expected_keys" (interval tier:
+  // each key from its syllable's acoustic onset to the next's, as csw cue
+  // writes it) and "gestures" (interval tier: each key's movement, from
+  // the previous target to its own, "PS <fallback level>").
+  Take take;
+  Audio audio;  // the utterance's audio after lead_in_s of silence, padded with silence to the take's duration
+  std::vector<std::string> warnings;
+};
+
+// Synthesises one utterance (phones with times, and its audio when it has
+// one). Throws InvalidInput naming `name` when the utterance has no phone or
+// no key, the dictionary has no dikey, or the models' parameter counts are
+// not the dictionary's; the concatenation's errors pass through.
+Synthesis Synthesize(const Utterance& utterance, const Dictionary& dictionary, const FaceModel& face,
+                     const HandModel& hand, const SynthesisOptions& options, const std::string& name);
+
+// The espeak-ng rate (words per minute) whose mean phone duration matches
+// `mean_phone_s` (MeanPhoneDuration of a dictionary) for `text`: two
+// secant steps from 150 wpm on espeak-ng's own phone durations, clamped to
+// [80, 450]. 150 when mean_phone_s is not finite and positive.
+int MatchSpeakingRate(const std::string& text, double mean_phone_s, const PhonetiseOptions& base = {});
+
+}  // namespace dict
+}  // namespace csw

@@ -1,0 +1,291 @@
+// csw say (workbench/jobs/say_job.h): option checks, the sentence-file
+// reader, the text report, and the job end to end on a dictionary built from
+// three virtual-cuer sentences: a sentence of the corpus is synthesised from
+// whole dikeys into a WAV, a TextGrid, a C3D and a video that read back with
+// the expected sizes, and the key recogniser finds the intended keys; bad
+// input (other models, a text without keys) gives one clear error.
+#include "workbench/jobs/say_job.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/videoio.hpp>
+
+#include "core/error.h"
+#include "io/c3d/c3d.h"
+#include "io/formats/textgrid.h"
+#include "io/formats/wav.h"
+#include "io/models/model_file.h"
+#include "models/face_model.h"
+#include "models/hand_model.h"
+#include "synth/cueing.h"
+#include "synth/marker_synthesis.h"
+#include "synth/phonetics.h"
+#include "tests/keys_job/cuer_corpus.h"
+#include "tests/testing/testing.h"
+#include "workbench/jobs/dict_job.h"
+#include "workbench/jobs/fit_job.h"
+#include "workbench/jobs/job_util.h"
+#include "workbench/jobs/keys_job.h"
+
+namespace csw::jobs {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+// The message holds `part`.
+::testing::AssertionResult Holds(const std::string& message, const std::string& part) {
+  if (message.find(part) != std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "'" << message << "' does not hold '" << part << "'";
+}
+
+SayOptions Valid() {
+  SayOptions o;
+  o.texts = {"bonjour"};
+  o.dict = "d.h5";
+  o.models = "m.h5";
+  o.output = "out";
+  return o;
+}
+
+TEST(SayOptions, RequiredOptionsAndReasons) {
+  EXPECT_EQ(Valid().Check(), "");
+  SayOptions o = Valid();
+  o.texts.clear();
+  EXPECT_EQ(o.Check(), "no text given (a sentence, or --text-file)");
+  o.text_file = "s.txt";
+  EXPECT_EQ(o.Check(), "");
+  o = Valid();
+  o.texts = {"  "};
+  EXPECT_EQ(o.Check(), "an empty text was given");
+  o = Valid();
+  o.dict.clear();
+  EXPECT_EQ(o.Check(), "no dictionary given (--dict)");
+  o = Valid();
+  o.models.clear();
+  EXPECT_EQ(o.Check(), "no model file given (--models)");
+  o = Valid();
+  o.output.clear();
+  EXPECT_EQ(o.Check(), "no output folder given (-o)");
+  o = Valid();
+  o.rate_wpm = 50;
+  EXPECT_EQ(o.Check(), "--rate must be in [80, 450] words per minute");
+  o = Valid();
+  o.phasing = "local";
+  EXPECT_EQ(o.Check(), "--phasing must be dikey or global");
+  o = Valid();
+  o.rate_hz = 5;
+  EXPECT_EQ(o.Check(), "--frame-rate must be 0 or in [10, 2000] Hz");
+  o = Valid();
+  o.fps = 0;
+  EXPECT_EQ(o.Check(), "--fps must be in [1, 240]");
+  o = Valid();
+  o.check = true;
+  EXPECT_EQ(o.Check(), "--check needs the key model (--keys)");
+  o = Valid();
+  o.corpus_phasing = "p.json";
+  EXPECT_EQ(o.Check(), "--corpus-phasing applies with --check");
+}
+
+TEST(ReadSentences, TrimsSkipsCommentsAndNamesBadLines) {
+  testing::TempDir dir;
+  const std::string good = (dir / "good.txt").string();
+  std::ofstream(good) << "\xEF\xBB\xBF# a comment\n  Il fait beau.  \r\n\n\t# indented comment\nLa nuit tombe.\n";
+  EXPECT_EQ(ReadSentences(good), (std::vector<std::string>{"Il fait beau.", "La nuit tombe."}));
+  const std::string bad = (dir / "bad.txt").string();
+  std::ofstream(bad) << "Il fait beau.\nL\xE9t\xE9\n";  // Latin-1 on line 2
+  try {
+    ReadSentences(bad);
+    FAIL() << "no error for a Latin-1 line";
+  } catch (const InvalidInput& e) {
+    EXPECT_TRUE(Holds(e.what(), bad + ":2: not UTF-8"));
+  }
+  const std::string empty = (dir / "empty.txt").string();
+  std::ofstream(empty) << "# nothing\n\n";
+  EXPECT_THROW(ReadSentences(empty), InvalidInput);
+  EXPECT_THROW(ReadSentences((dir / "absent.txt").string()), IoError);
+}
+
+TEST(SayText, RendersTheReport) {
+  const json r = {
+      {"corpus", "out/synthesis.h5"},
+      {"fallback", {{"whole", 5}, {"closest placement", 1}, {"two streams", 0}, {"interpolated", 0}}},
+      {"sentences",
+       {{{"take", "say_001"},
+         {"duration_s", 2.5},
+         {"keys", 4},
+         {"rate_wpm", 162},
+         {"folder", "out"},
+         {"warnings", {"no ffmpeg"}}}}},
+      {"check",
+       {{"keys", {{"correct", 3}, {"intended", 4}, {"accuracy", 0.75}}},
+        {"continuity",
+         {{"p99_jump_mm", 5.5}, {"max_jump_mm", 12.25}, {"corpus_p99_jump_mm", 6.0}, {"corpus_max_jump_mm", 20.0}}},
+        {"timing",
+         {{"CV",
+           {{"placement_target_ms", 12.4},
+            {"corpus_placement_target_ms", nullptr},
+            {"shape_target_ms", -20.0},
+            {"corpus_shape_target_ms", -18.0}}}}}}}};
+  EXPECT_EQ(SayText(r),
+            "say_001: 2.50 s, 4 keys, 162 wpm -> out\n"
+            "  warning: no ffmpeg\n"
+            "1 sentences; keys reached by whole dikeys 5, closest placement 1, two streams 0, interpolated 0\n"
+            "corpus of the synthesised takes: out/synthesis.h5\n"
+            "recognised keys: 3 of 4 (75.0 %)\n"
+            "marker jumps: p99 5.50 mm, max 12.25 mm (corpus: p99 6.00 mm, max 20.00 mm)\n"
+            "CV targets re A1: placement 12 ms (corpus nan), shape -20 ms (corpus -18)\n");
+}
+
+// Three virtual-cuer sentences, face and hand models, a key model and a
+// dictionary built from the labelled key tiers.
+struct SayFixture : testing::CuerCorpus {
+  std::string models, dictionary;
+  SayFixture() : CuerCorpus(3) {
+    models = (dir / "models.h5").string();
+    dictionary = (dir / "dict.h5").string();
+    Progress progress;
+    for (const char* kind : {"face", "hand"}) {
+      FitOptions fo;
+      fo.corpus = corpus;
+      fo.kind = kind;
+      fo.output = models;
+      Fit(fo, progress);
+    }
+    KeysTrainOptions t;
+    t.corpus = corpus;
+    t.takes = {"s*"};
+    t.output = keys;
+    KeysTrain(t, progress);
+    DictBuildOptions d;
+    d.corpus = corpus;
+    d.models = models;
+    d.keys = keys;
+    d.output = dictionary;
+    d.tier = "keys";
+    DictBuild(d, progress);
+  }
+};
+
+class SayJob : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { fixture_ = new SayFixture(); }
+  static void TearDownTestSuite() {
+    delete fixture_;
+    fixture_ = nullptr;
+  }
+  static SayFixture* fixture_;
+};
+SayFixture* SayJob::fixture_ = nullptr;
+
+TEST_F(SayJob, SynthesisesACorpusSentenceFromWholeDikeys) {
+  ASSERT_NE(fixture_, nullptr);
+  SayFixture& fx = *fixture_;
+  const std::string text = ShippedSentences()[0];
+  SayOptions o;
+  o.texts = {text};
+  o.dict = fx.dictionary;
+  o.models = fx.models;
+  o.keys = fx.keys;
+  o.check = true;
+  o.output = (fx.dir / "say").string();
+  Progress progress;
+  const json r = Say(o, progress);
+  ASSERT_EQ(r["sentences"].size(), 1u);
+  const json& s = r["sentences"][0];
+
+  // The intended keys, computed here from espeak-ng's phones and the LfPC rules.
+  const std::vector<Key> keys = CueKeys(Phonetise(text).phones);
+  std::vector<std::string> intended;
+  for (const Key& k : keys)
+    if (k.type != KeyType::kRest) intended.push_back(k.Code());
+  ASSERT_GE(intended.size(), 4u);
+  EXPECT_EQ(s["keys"], static_cast<int>(intended.size()));
+  EXPECT_EQ(s["check"]["intended"].get<std::vector<std::string>>(), intended);
+  // The sentence is in the corpus: every succession exists whole.
+  EXPECT_EQ(s["fallback"]["whole"], static_cast<int>(keys.size()) - 1);
+  EXPECT_EQ(s["fallback"]["interpolated"], 0);
+  // At least 90 % of the keys recognised at their targets (a key model trained on 3 sentences).
+  EXPECT_GE(r["check"]["keys"]["accuracy"].get<double>(), 0.9) << r["check"].dump() << "\n" << s.dump();
+
+  // Files read back: the C3D holds every model marker, one frame per
+  // 1 / rate; the WAV and the video last as long (± 1 frame).
+  const ModelFile m = LoadModelFile(fx.models);
+  const std::vector<std::string> names = SynthesisMarkerNames(*m.face, *m.hand);
+  const fs::path out(o.output);
+  const Take c3d = ReadC3d((out / "markers.c3d").string());
+  EXPECT_EQ(c3d.marker_names, names);
+  const double rate = fx.sims.front().take.rate_hz;  // the corpus's rate by default
+  EXPECT_DOUBLE_EQ(c3d.rate_hz, rate);
+  const double duration = s["duration_s"].get<double>();
+  EXPECT_EQ(c3d.frames(), std::llround(duration * rate));
+  int64_t missing = 0;
+  for (int64_t f = 0; f < c3d.frames(); ++f)
+    for (int64_t j = 0; j < static_cast<int64_t>(names.size()); ++j) missing += c3d.markers.Visible(f, j) ? 0 : 1;
+  EXPECT_EQ(missing, 0);
+  const Audio wav = ReadWav((out / "speech.wav").string());
+  EXPECT_NEAR(wav.duration_s(), duration, 1.0 / rate);
+  double xmin = 0, xmax = 0;
+  const std::vector<LabelTier> tiers = ReadTextGrid((out / "cues.TextGrid").string(), &xmin, &xmax);
+  std::vector<std::string> tier_names, key_codes;
+  for (const LabelTier& t : tiers) {
+    tier_names.push_back(t.name);
+    if (t.name == "keys")
+      for (const Label& l : t.labels) key_codes.push_back(l.text);
+  }
+  EXPECT_EQ(tier_names,
+            (std::vector<std::string>{"words", "phones", "expected_keys", "keys", "placement_targets", "gestures"}));
+  ASSERT_EQ(key_codes.size(), intended.size() + 2);  // rests at both ends
+  EXPECT_EQ(key_codes.front(), "00");
+  EXPECT_EQ(std::vector<std::string>(key_codes.begin() + 1, key_codes.end() - 1), intended);
+  cv::VideoCapture video((out / "pointlight.mp4").string());
+  ASSERT_TRUE(video.isOpened());
+  int frames = 0;
+  cv::Mat image;
+  while (video.read(image)) ++frames;
+  EXPECT_NEAR(frames, wav.duration_s() * 25.0, 1.0);
+  EXPECT_TRUE(fs::exists(out / "synthesis.h5"));
+  EXPECT_TRUE(fs::exists(out / "say.json"));
+}
+
+TEST_F(SayJob, RefusesOtherModelsAndTextsWithoutKeys) {
+  ASSERT_NE(fixture_, nullptr);
+  SayFixture& fx = *fixture_;
+  Progress progress;
+  // Models fitted on another selection of takes have another fingerprint.
+  const std::string other = (fx.dir / "other.h5").string();
+  for (const char* kind : {"face", "hand"}) {
+    FitOptions fo;
+    fo.corpus = fx.corpus;
+    fo.kind = kind;
+    fo.takes = {"s0", "s1"};
+    fo.output = other;
+    Fit(fo, progress);
+  }
+  SayOptions o;
+  o.texts = {"Il fait beau."};
+  o.dict = fx.dictionary;
+  o.models = other;
+  o.video = false;
+  o.output = (fx.dir / "other_out").string();
+  try {
+    Say(o, progress);
+    FAIL() << "synthesis with other models";
+  } catch (const InvalidInput& e) {
+    EXPECT_TRUE(Holds(e.what(), fx.dictionary));
+    EXPECT_TRUE(Holds(e.what(), "was built with models"));
+  }
+  o.models = fx.models;
+  o.texts = {"!!!"};
+  try {
+    Say(o, progress);
+    FAIL() << "a text without keys";
+  } catch (const InvalidInput& e) {
+    EXPECT_TRUE(Holds(e.what(), "say_001"));
+  }
+}
+
+}  // namespace
+}  // namespace csw::jobs
