@@ -207,9 +207,24 @@ Eigen::RowVectorXd DikeyRow(const DikeyUnit& u, double row) {
   return v;
 }
 
+// The fraction of a unit's rows trimmed from its start so that it is
+// compressed at most max_compression times onto a slot of slot_s seconds.
+double TrimFraction(const DikeyUnit& u, double slot_s, double max_compression) {
+  const double d = u.duration_s();
+  if (max_compression <= 0 || !(d > max_compression * slot_s)) return 0.0;
+  return 1.0 - max_compression * slot_s / d;
+}
+
+// Row of a unit at u in [0, 1] of its slot, `skip` of its rows trimmed.
+double UnitRowAt(const DikeyUnit& unit, double skip, double u) {
+  return (skip + u * (1.0 - skip)) * static_cast<double>(unit.frames() - 1);
+}
+
 struct DikeyCandidate {
   FallbackLevel level = FallbackLevel::kWhole;
   int shape_unit = -1, pose_unit = -1;  // the same unit for levels 0 and 1
+  // Fraction of each unit's rows trimmed from its start (ConcatOptions::max_compression).
+  double shape_skip = 0, pose_skip = 0;
   KeyCode used_to;
   double selection = 0;  // RMS duration mismatch (s)
   // Values at u = 0 and 1, and the intended value at the arriving key (= last
@@ -272,6 +287,8 @@ std::string ConcatOptions::Check() const {
     return "face_weights must be finite and >= 0";
   if (max_fallback_level < 0 || max_fallback_level > 3) return "max_fallback_level must be in 0-3";
   if (max_stream_candidates < 1) return "max_stream_candidates must be >= 1";
+  if (!(max_compression == 0 || (max_compression >= 1 && max_compression < 1e6)))
+    return "max_compression must be 0 or >= 1";
   return "";
 }
 
@@ -350,9 +367,10 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
         DikeyCandidate c;
         c.level = level;
         c.shape_unit = c.pose_unit = j;
+        c.shape_skip = c.pose_skip = TrimFraction(u, target, o.max_compression);
         c.used_to = to;
         c.selection = std::abs(mismatch[static_cast<size_t>(j)]);
-        c.first = DikeyRow(u, 0);
+        c.first = DikeyRow(u, UnitRowAt(u, c.shape_skip, 0));
         c.last = DikeyRow(u, static_cast<double>(u.frames() - 1));
         c.end = c.last;
         if (level == FallbackLevel::kClosestPlacement)
@@ -401,8 +419,10 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
           c.used_to = k1;
           const double ms = mismatch[static_cast<size_t>(s)], mp = mismatch[static_cast<size_t>(p)];
           c.selection = std::sqrt(0.5 * (ms * ms + mp * mp));
-          c.first = DikeyRow(us, 0);
-          c.first.tail(12) = DikeyRow(up, 0).tail(12);
+          c.shape_skip = TrimFraction(us, target, o.max_compression);
+          c.pose_skip = TrimFraction(up, target, o.max_compression);
+          c.first = DikeyRow(us, UnitRowAt(us, c.shape_skip, 0));
+          c.first.tail(12) = DikeyRow(up, UnitRowAt(up, c.pose_skip, 0)).tail(12);
           c.last = DikeyRow(us, static_cast<double>(us.frames() - 1));
           c.last.tail(12) = DikeyRow(up, static_cast<double>(up.frames() - 1)).tail(12);
           c.end = c.last;
@@ -452,10 +472,10 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
     const DikeyCandidate& c = chosen(i);
     if (c.level == FallbackLevel::kInterpolated) return c.first + MinimumJerk(u) * (c.last - c.first);
     const DikeyUnit& us = d.dikeys[static_cast<size_t>(c.shape_unit)];
-    Eigen::RowVectorXd v = DikeyRow(us, u * static_cast<double>(us.frames() - 1));
+    Eigen::RowVectorXd v = DikeyRow(us, UnitRowAt(us, c.shape_skip, u));
     if (c.pose_unit != c.shape_unit) {
       const DikeyUnit& up = d.dikeys[static_cast<size_t>(c.pose_unit)];
-      v.tail(12) = DikeyRow(up, u * static_cast<double>(up.frames() - 1)).tail(12);
+      v.tail(12) = DikeyRow(up, UnitRowAt(up, c.pose_skip, u)).tail(12);
     }
     return v;
   };

@@ -46,6 +46,13 @@ struct ConcatOptions {
   // Two-stream and half-unit candidates: at most this many units per stream
   // (the closest in duration), so a slot has at most its square.
   int max_stream_candidates = 8;
+  // Largest time compression of a dikey unit: a unit longer than
+  // max_compression × its slot shows only its last max_compression × slot
+  // seconds (its start — the leaving key's hold and the slow start of the
+  // movement — is trimmed, the smoothing absorbing the difference), so that
+  // no movement runs much faster than the corpus ever made it. 0 = never
+  // trim (every unit warped whole onto its slot).
+  double max_compression = 1.25;
   std::string Check() const;  // "" or the reason
 };
 

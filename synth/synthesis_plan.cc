@@ -42,6 +42,8 @@ bool ParsePhasingRule(const std::string& name, PhasingRule* rule) {
 std::string PlanOptions::Check() const {
   if (!(min_interval_s > 0 && min_interval_s < 1)) return "min_interval_s must be in (0, 1) s";
   if (!(default_rest_s > 0 && default_rest_s < 10)) return "default_rest_s must be in (0, 10) s";
+  if (!(shrinkage_units >= 0 && shrinkage_units < 1e6)) return "shrinkage_units must be >= 0";
+  if (!(min_slot_fraction >= 0 && min_slot_fraction <= 1)) return "min_slot_fraction must be in [0, 1]";
   return "";
 }
 
@@ -99,8 +101,11 @@ SynthesisPlan PlanKeys(const std::vector<Key>& keys, const std::vector<Phone>& p
   // that never mixes keys of different codes).
   std::map<std::string, std::pair<double, int>> by_succession;
   std::map<std::string, std::pair<double, int>> by_arriving;
-  std::vector<double> leave_rest, reach_rest;
+  std::vector<double> leave_rest, reach_rest, all_durations;
+  std::map<std::string, std::vector<double>> durations;
   for (const DikeyUnit& u : dictionary.dikeys) {
+    durations[SuccessionKey(u.from, u.to)].push_back(u.duration_s());
+    all_durations.push_back(u.duration_s());
     if (u.from.IsRest() && !u.to.IsRest()) leave_rest.push_back(u.duration_s());
     if (u.to.IsRest() && !u.from.IsRest()) reach_rest.push_back(u.duration_s());
     if (!std::isfinite(u.phasing_s) || u.to.IsRest()) continue;
@@ -147,7 +152,9 @@ SynthesisPlan PlanKeys(const std::vector<Key>& keys, const std::vector<Phone>& p
       const auto s = by_succession.find(SuccessionKey(previous, p.code));
       const auto a = by_arriving.find(p.code.Text());
       if (s != by_succession.end()) {
-        p.target_s = p.a1_s + s->second.first / s->second.second;
+        const double k = a != by_arriving.end() ? options.shrinkage_units : 0.0;
+        const double code_mean = a != by_arriving.end() ? a->second.first / a->second.second : 0.0;
+        p.target_s = p.a1_s + (s->second.first + k * code_mean) / (s->second.second + k);
         p.source = "dikey";
       } else if (a != by_arriving.end()) {
         p.target_s = p.a1_s + a->second.first / a->second.second;
@@ -158,9 +165,16 @@ SynthesisPlan PlanKeys(const std::vector<Key>& keys, const std::vector<Phone>& p
     previous = p.code;
   }
 
-  // Strictly increasing targets, min_interval_s apart.
+  // Strictly increasing targets, min_interval_s apart and each slot at least
+  // min_slot_fraction of its succession's median unit duration.
+  const double all_median = Median(all_durations);
+  auto shortest_slot = [&](const KeyCode& from, const KeyCode& to) {
+    const auto d = durations.find(SuccessionKey(from, to));
+    const double median = d != durations.end() ? Median(d->second) : all_median;
+    return std::max(options.min_interval_s, std::isfinite(median) ? options.min_slot_fraction * median : 0.0);
+  };
   for (size_t i = 1; i < cued.size(); ++i) {
-    const double earliest = cued[i - 1].target_s + options.min_interval_s;
+    const double earliest = cued[i - 1].target_s + shortest_slot(cued[i - 1].code, cued[i].code);
     if (cued[i].target_s < earliest) {
       cued[i].target_s = earliest;
       cued[i].source += "+pushed";

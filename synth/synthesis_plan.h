@@ -10,6 +10,9 @@
 //     succession (previous key → this key); where the dictionary has none,
 //     the mean over the units arriving at the same key code, then the global
 //     rule.
+// Two successive targets are at least min_interval_s apart and at least
+// min_slot_fraction of the succession's median unit duration (later targets
+// are pushed).
 // The rest keys at both ends are placed one typical movement (the median
 // duration of the dictionary's units leaving / reaching rest) before the first
 // target and after the last; when the first would fall before time 0, the
@@ -55,6 +58,17 @@ struct PlanOptions {
   // When the dictionary has no unit leaving (reaching) rest: the time from
   // the leading rest to the first target (from the last target to rest).
   double default_rest_s = 0.4;
+  // kPerDikey: a succession's mean phasing is shrunk towards the mean of the
+  // units arriving at the same code, as if that mean had this many more
+  // units ((sum + k · code mean) / (n + k)): a succession seen in two units
+  // is mostly noise (0 = the succession's own mean).
+  double shrinkage_units = 3;
+  // A slot (previous target → this target) is at least this fraction of the
+  // median duration of the dictionary's units for that succession (of all
+  // its units when it has none for it): a unit squeezed into much less time
+  // than the corpus ever took makes the hand jump. Later targets are pushed
+  // ("+pushed"). 0 = only min_interval_s.
+  double min_slot_fraction = 0.6;
   std::string Check() const;
 };
 

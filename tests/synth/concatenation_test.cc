@@ -155,6 +155,41 @@ TEST(ConcatenateDikeys, AllWholeKeyFramesAreTheUnitsEndRows) {
   EXPECT_NEAR(t.total_cost, 0.05 + 0.06 + 0.0, 1e-9);
 }
 
+TEST(ConcatenateDikeys, AUnitMuchLongerThanItsSlotIsTrimmedNotCompressed) {
+  // A 1.0 s 12 → 35 unit in a 0.4 s slot (frames 50-90): with
+  // max_compression 1.25 the slot shows the unit's last 0.5 s, i.e. the ramp
+  // from halfway (a = 0.5) to its end; the first slot (00 → 12, 0.5 s) ends at
+  // the ramp's start, so smoothing spreads the half-ramp jump over it. Without
+  // trimming the whole unit is squeezed (2.5 x) and frame 70 is halfway.
+  const Dictionary d = DikeyDictionary({Dikey("00", "12", 0.5), Dikey("12", "35", 1.0), Dikey("35", "00", 0.4)});
+  const auto keys = Keys({{"00", 0.0}, {"12", 0.5}, {"35", 0.9}, {"00", 1.3}});
+  ConcatOptions o;
+  o.max_compression = 1.25;
+  const HandTrack t = ConcatenateDikeys(d, keys, 1.3, o);
+  const Eigen::RowVectorXd mid = 0.5 * (ShapeValue(2) + ShapeValue(5));
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(50), mid), kTol);  // the trimmed unit's first row
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(70), 0.75 * ShapeValue(5) + 0.25 * ShapeValue(2)), kTol);
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(90), ShapeValue(5)), kTol);
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(25), 0.5 * (ShapeValue(0) + ShapeValue(2)) + 0.5 * (mid - ShapeValue(2))),
+            kTol);  // halfway through slot 0: its ramp plus half the jump
+  o.max_compression = 0;
+  const HandTrack squeezed = ConcatenateDikeys(d, keys, 1.3, o);
+  EXPECT_LT(MaxAbsDiff(squeezed.hand_params.row(50), ShapeValue(2)), kTol);
+  EXPECT_LT(MaxAbsDiff(squeezed.hand_params.row(70), mid), kTol);
+  // The largest step of the first hand parameter in slot 1: 3/40 per frame
+  // squeezed, 1.5/40 trimmed (the unit's own ramp is 3 over 100 frames).
+  auto max_step = [](const HandTrack& h) {
+    double m = 0;
+    for (Eigen::Index f = 51; f <= 90; ++f) m = std::max(m, std::abs(h.hand_params(f, 0) - h.hand_params(f - 1, 0)));
+    return m;
+  };
+  EXPECT_NEAR(max_step(squeezed), 3.0 / 40.0, 1e-9);
+  EXPECT_NEAR(max_step(t), 1.5 / 40.0, 1e-9);
+  o.max_compression = 0.5;
+  EXPECT_THAT([&] { ConcatenateDikeys(d, keys, 1.3, o); },
+              ::testing::ThrowsMessage<InvalidInput>(HasSubstr("max_compression must be 0 or >= 1")));
+}
+
 TEST(ConcatenateDikeys, ChoosesTheCloserDurationWhenJoinsTie) {
   // Two continuous 12 → 35 candidates for a 0.30 s slot: 0.20 s (listed
   // first) and 0.32 s.

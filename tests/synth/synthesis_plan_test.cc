@@ -47,6 +47,8 @@ TEST(SynthesisPlan, GlobalRuleTargetsMiddleOfConsonantVowelOnsetConsonantOnset) 
   d.dikeys.push_back(Unit(KeyCode{}, KeyCode{keys[1].placement, keys[1].shape}, 0.3, 0.0));  // leave rest: 0.3 s
   d.dikeys.push_back(Unit(KeyCode{1, 5}, KeyCode{}, 0.45, NAN));                             // reach rest: 0.45 s
   PlanOptions o;
+  o.shrinkage_units = 0;    // each succession's own mean (shrinkage: its own test)
+  o.min_slot_fraction = 0;  // min_interval_s only (slots: their own test)
   o.rule = PhasingRule::kGlobal;
   const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
   ASSERT_EQ(plan.keys.size(), 5u);
@@ -74,6 +76,8 @@ TEST(SynthesisPlan, PerDikeyPhasingUsesTheSuccessionThenTheCodeThenTheGlobalRule
   d.dikeys.push_back(Unit(KeyCode{}, cv, 0.4, -0.04));
   d.dikeys.push_back(Unit(KeyCode{2, 3}, v, 0.2, 0.06));
   PlanOptions o;
+  o.shrinkage_units = 0;    // each succession's own mean (shrinkage: its own test)
+  o.min_slot_fraction = 0;  // min_interval_s only (slots: their own test)
   o.rule = PhasingRule::kPerDikey;
   const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
   EXPECT_NEAR(plan.keys[1].target_s, 0.5 - 0.03, 1e-12);  // A1 = onset of [p]
@@ -93,6 +97,8 @@ TEST(SynthesisPlan, LeadInWhenTheFirstMovementWouldStartBeforeTimeZero) {
   Dictionary d;
   d.dikeys.push_back(Unit(KeyCode{}, KeyCode{keys[1].placement, keys[1].shape}, 0.5, 0.0));
   PlanOptions o;
+  o.shrinkage_units = 0;    // each succession's own mean (shrinkage: its own test)
+  o.min_slot_fraction = 0;  // min_interval_s only (slots: their own test)
   o.rule = PhasingRule::kGlobal;
   const SynthesisPlan plan = PlanKeys(keys, phones, 0.5, d, o);
   // First target 0.05 (middle of [p]) needs 0.5 s from rest: lead-in 0.45 s.
@@ -109,6 +115,8 @@ TEST(SynthesisPlan, TargetsArePushedApartByTheMinimumInterval) {
   // The CV key's succession says +0.3 s (after the vowel's onset at 0.75).
   d.dikeys.push_back(Unit(KeyCode{}, KeyCode{keys[1].placement, keys[1].shape}, 0.3, 0.3));
   PlanOptions o;
+  o.shrinkage_units = 0;    // each succession's own mean (shrinkage: its own test)
+  o.min_slot_fraction = 0;  // min_interval_s only (slots: their own test)
   o.min_interval_s = 0.05;
   const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
   EXPECT_NEAR(plan.keys[1].target_s, 0.8, 1e-12);
@@ -116,6 +124,48 @@ TEST(SynthesisPlan, TargetsArePushedApartByTheMinimumInterval) {
   EXPECT_EQ(plan.keys[2].source, "global+pushed");
   EXPECT_NEAR(plan.keys[3].target_s, 0.90, 1e-12);  // 0.90 already 0.05 after
   for (size_t i = 1; i < plan.keys.size(); ++i) EXPECT_GT(plan.keys[i].target_s, plan.keys[i - 1].target_s);
+}
+
+TEST(SynthesisPlan, SuccessionMeansAreShrunkTowardsTheArrivingCodesMean) {
+  const std::vector<Phone> phones = Phones();
+  const std::vector<Key> keys = CueKeys(phones);
+  const KeyCode cv{keys[1].placement, keys[1].shape};
+  Dictionary d;
+  // Rest → CV once at -0.06; CV reached from elsewhere three times at +0.02.
+  // Code mean over the four units: (-0.06 + 3 × 0.02) / 4 = 0; with k = 2:
+  // (-0.06 + 2 × 0) / (1 + 2) = -0.02.
+  d.dikeys.push_back(Unit(KeyCode{}, cv, 0.2, -0.06));
+  for (int i = 0; i < 3; ++i) d.dikeys.push_back(Unit(KeyCode{2, 3}, cv, 0.2, 0.02));
+  PlanOptions o;
+  o.min_slot_fraction = 0;
+  o.shrinkage_units = 2;
+  const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
+  EXPECT_NEAR(plan.keys[1].target_s, 0.5 - 0.02, 1e-12);
+  EXPECT_EQ(plan.keys[1].source, "dikey");
+  o.shrinkage_units = 0;
+  EXPECT_NEAR(PlanKeys(keys, phones, 1.2, d, o).keys[1].target_s, 0.5 - 0.06, 1e-12);
+}
+
+TEST(SynthesisPlan, SlotsAreAtLeastAFractionOfTheSuccessionsMedianDuration) {
+  const std::vector<Phone> phones = Phones();
+  const std::vector<Key> keys = CueKeys(phones);
+  const KeyCode cv{keys[1].placement, keys[1].shape}, v{keys[2].placement, keys[2].shape};
+  Dictionary d;
+  // CV → V units of 0.3, 0.5 and 0.6 s: median 0.5; 0.6 × 0.5 = 0.3 s. The
+  // global rule puts CV at 0.55 (middle of [p]) and V at 0.75: pushed to 0.85.
+  for (double dur : {0.3, 0.5, 0.6}) d.dikeys.push_back(Unit(cv, v, dur, NAN));
+  PlanOptions o;
+  o.rule = PhasingRule::kGlobal;
+  o.min_slot_fraction = 0.6;
+  const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
+  EXPECT_NEAR(plan.keys[1].target_s, 0.55, 1e-12);
+  EXPECT_NEAR(plan.keys[2].target_s, 0.85, 1e-12);
+  EXPECT_EQ(plan.keys[2].source, "global+pushed");
+  // V → C has no unit: the median of all units (0.5) gives 0.3 s too.
+  EXPECT_NEAR(plan.keys[3].target_s, 1.15, 1e-12);
+  PlanOptions bad = o;
+  bad.min_slot_fraction = 1.5;
+  EXPECT_THROW(PlanKeys(keys, phones, 1.2, d, bad), InvalidInput);
 }
 
 TEST(SynthesisPlan, MeanPhoneDurationOfPhonesAndOfADictionary) {

@@ -750,6 +750,12 @@ class SayCommand : public Command {
     sub_->add_option("--frame-rate", options_.rate_hz, "Marker frame rate (Hz); 0 = the corpus's")
         ->capture_default_str();
     sub_->add_option("--fps", options_.fps, "Point-light video frame rate")->capture_default_str();
+    sub_->add_option("--selection-weight", options_.selection_weight,
+                     "Unit selection: cost per second of RMS duration mismatch (docs/synthesis.md)")
+        ->capture_default_str();
+    sub_->add_option("--concatenation-weight", options_.concatenation_weight,
+                     "Unit selection: cost per standardised RMS parameter jump at a join")
+        ->capture_default_str();
     sub_->add_flag("--no-video", no_video_, "Do not write pointlight.mp4");
     sub_->add_flag("--check", options_.check,
                    "Score the synthesised markers with the key recogniser, measure continuity and timing");

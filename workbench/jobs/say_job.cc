@@ -87,6 +87,8 @@ std::string SayOptions::Check() const {
   if (phasing != "dikey" && phasing != "global") return "--phasing must be dikey or global";
   if (!(rate_hz == 0 || (rate_hz >= 10 && rate_hz <= 2000))) return "--frame-rate must be 0 or in [10, 2000] Hz";
   if (!(fps >= 1 && fps <= 240)) return "--fps must be in [1, 240]";
+  if (!(selection_weight >= 0 && selection_weight < 1e6)) return "--selection-weight must be >= 0";
+  if (!(concatenation_weight >= 0 && concatenation_weight < 1e6)) return "--concatenation-weight must be >= 0";
   if (check && keys.empty()) return "--check needs the key model (--keys)";
   if (!corpus_phasing.empty() && !check) return "--corpus-phasing applies with --check";
   return "";
@@ -120,6 +122,8 @@ json Say(const SayOptions& options, Progress& progress) {
   dict::SynthesisOptions so;
   ParsePhasingRule(options.phasing, &so.plan.rule);
   so.concat.rate_hz = options.rate_hz;
+  so.concat.selection_weight = options.selection_weight;
+  so.concat.concatenation_weight = options.concatenation_weight;
   const double mean_phone = dict::MeanPhoneDuration(dictionary);
 
   const fs::path out(options.output);
@@ -175,6 +179,29 @@ json Say(const SayOptions& options, Progress& progress) {
       for (const std::string& w : v.warnings) s.warnings.push_back(w);
     }
 
+    // Every key: its planned target, the rule that gave it, how its slot was
+    // filled (fallback level, units used with their takes and durations).
+    json key_list = json::array();
+    for (size_t k = 0; k < s.plan.keys.size(); ++k) {
+      const dict::PlannedKey& p = s.plan.keys[k];
+      json kj = {{"code", p.code.Text()}, {"target_s", p.target_s}, {"timing", p.source}};
+      if (k > 0 && k - 1 < s.hand.keys.size()) {
+        const dict::KeyReport& rep = s.hand.keys[k - 1];
+        kj["slot_s"] = p.target_s - s.plan.keys[k - 1].target_s;
+        kj["level"] = dict::FallbackLevelName(rep.level);
+        json units = json::array();
+        for (int u : rep.units) {
+          const dict::DikeyUnit& unit = dictionary.dikeys[static_cast<size_t>(u)];
+          units.push_back({{"take", unit.take},
+                           {"from", unit.from.Text()},
+                           {"to", unit.to.Text()},
+                           {"start_s", unit.start_s},
+                           {"duration_s", unit.duration_s()}});
+        }
+        kj["units"] = units;
+      }
+      key_list.push_back(kj);
+    }
     std::vector<int> sentence_levels(4, 0);
     for (const dict::KeyReport& r : s.hand.keys) ++sentence_levels[static_cast<size_t>(r.level)];
     for (size_t l = 0; l < 4; ++l) levels[l] += sentence_levels[l];
@@ -189,6 +216,7 @@ json Say(const SayOptions& options, Progress& progress) {
                {"phones", u.phones.size()},
                {"keys", keys_n},
                {"fallback", LevelCounts(sentence_levels)},
+               {"key_plan", key_list},
                {"files", files},
                {"warnings", s.warnings}};
 

@@ -27,20 +27,22 @@
 namespace csw::jobs {
 
 struct SayOptions {
-  std::vector<std::string> texts;  // sentences given on the command line
-  std::string text_file;           // one sentence per line (blank lines and lines starting with # skipped)
-  std::string dict;                // dictionary file (csw dict build)
-  std::string models;              // the model file the dictionary was built with
-  std::string output;              // output folder (created)
-  int rate_wpm = 0;                // espeak-ng rate; 0 = match the corpus's mean phone duration
-  std::string phasing = "dikey";   // "dikey" (stored per-dikey phasing) or "global" (the seed's rule)
-  double rate_hz = 0;              // output frame rate; 0 = the corpus's
-  bool video = true;               // write pointlight.mp4
-  double fps = 25;                 // video frame rate
-  bool check = false;              // close the loop (needs keys)
-  std::string keys;                // key model file (csw keys train)
-  std::string corpus_phasing;      // JSON of csw phasing on the corpus ("" = timing without the corpus's)
-  std::string Check() const;       // "" or the reason
+  std::vector<std::string> texts;   // sentences given on the command line
+  std::string text_file;            // one sentence per line (blank lines and lines starting with # skipped)
+  std::string dict;                 // dictionary file (csw dict build)
+  std::string models;               // the model file the dictionary was built with
+  std::string output;               // output folder (created)
+  int rate_wpm = 0;                 // espeak-ng rate; 0 = match the corpus's mean phone duration
+  std::string phasing = "dikey";    // "dikey" (stored per-dikey phasing) or "global" (the seed's rule)
+  double rate_hz = 0;               // output frame rate; 0 = the corpus's
+  double selection_weight = 10;     // per s of RMS duration mismatch (ConcatOptions)
+  double concatenation_weight = 1;  // per standardised RMS jump (ConcatOptions)
+  bool video = true;                // write pointlight.mp4
+  double fps = 25;                  // video frame rate
+  bool check = false;               // close the loop (needs keys)
+  std::string keys;                 // key model file (csw keys train)
+  std::string corpus_phasing;       // JSON of csw phasing on the corpus ("" = timing without the corpus's)
+  std::string Check() const;        // "" or the reason
 };
 
 // {"dict", "models", "output", "rate_wpm", "phasing", "rate_hz",
