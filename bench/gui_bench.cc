@@ -29,6 +29,7 @@
 
 #include "io/corpus/corpus.h"
 #include "workbench/gui/demo_take.h"
+#include "workbench/gui/job_runner.h"
 #include "workbench/gui/main_window.h"
 #include "workbench/gui/marker_view.h"
 #include "workbench/gui/playback.h"

@@ -427,7 +427,21 @@ struct MainWindow::LoadedTake {
   std::shared_ptr<const Take> take;
   std::optional<MarkerSet> remembered;  // the marker set the take remembers, parsed
   QString remembered_error;             // why it is not usable, "" when fine
+  TimeSeriesPanel::Prepared series;     // the plots' audio and first marker lane
+  int first_visible = -1;               // FirstVisibleMarker
 };
+
+namespace {
+// The first marker with data in a take (sampled over 64 frames), -1 when none.
+int FirstVisibleMarker(const Take& take) {
+  for (int64_t k = 0; k < take.markers.markers(); ++k) {
+    for (int64_t f = 0; f < take.frames(); f += std::max<int64_t>(1, take.frames() / 64)) {
+      if (take.markers.Visible(f, k)) return static_cast<int>(k);
+    }
+  }
+  return -1;
+}
+}  // namespace
 
 bool MainWindow::SelectTake(const QString& name) {
   if (!corpus_) return false;
@@ -469,9 +483,19 @@ void MainWindow::StartTakeLoad() {
   const Corpus corpus = *corpus_;  // a copy sharing the open file (HDF5 calls are serialized)
   const std::string name = loading_name_.toStdString();
   const bool parse_set = !marker_set_;
-  take_loader_->Start([corpus, name, out, parse_set](Progress& progress) {
+  const auto quantity = static_cast<MarkerQuantity>(quantity_combo_->currentData().toInt());
+  take_loader_->Start([corpus, name, out, parse_set, quantity](Progress& progress) {
     progress.Update("loading take", 0.0);
     auto take = std::make_shared<const Take>(corpus.LoadTake(name));
+    // What grows with the take is prepared here too: the plots' audio and
+    // first marker lane (the first marker with data, so the panel shows some motion).
+    out->series.audio = TimeSeriesPanel::AudioSeries(*take);
+    out->first_visible = FirstVisibleMarker(*take);
+    if (out->first_visible >= 0) {
+      out->series.marker = out->first_visible;
+      out->series.quantity = quantity;
+      out->series.series = TimeSeriesPanel::MarkerLaneSeries(*take, out->first_visible, quantity);
+    }
     if (parse_set && !take->markerset_json.empty()) {
       try {
         out->remembered = ParseMarkerSet(take->markerset_json, corpus.path() + ": take " + take->name);
@@ -506,7 +530,7 @@ void MainWindow::OnTakeLoadEnded(bool ok, const QString& message) {
     emit TakeLoadFailed(name, why);
     return;
   }
-  ShowLoadedTake(std::move(result->take), std::move(result->remembered), result->remembered_error);
+  ShowLoadedTake(std::move(*result));
 }
 
 void MainWindow::UpdateTakeBusy() {
@@ -520,8 +544,10 @@ void MainWindow::UpdateTakeBusy() {
   }
 }
 
-void MainWindow::ShowLoadedTake(std::shared_ptr<const Take> take, std::optional<MarkerSet> remembered,
-                                const QString& remembered_error) {
+void MainWindow::ShowLoadedTake(LoadedTake loaded) {
+  std::shared_ptr<const Take> take = std::move(loaded.take);
+  const std::optional<MarkerSet>& remembered = loaded.remembered;
+  const QString& remembered_error = loaded.remembered_error;
   const QString name = QString::fromStdString(take->name);
   // Labels this session saved (or is saving) are newer than what the open corpus holds.
   if (auto tiers = labels_->KnownTiers(corpus_->path(), take->name)) {
@@ -543,22 +569,14 @@ void MainWindow::ShowLoadedTake(std::shared_ptr<const Take> take, std::optional<
     marker_view_->SetTake(take_, nullptr);
   }
   plots_->SetHiddenTier(label_tier_combo_->currentText().trimmed());  // drawn by the label lane instead
-  plots_->SetTake(take_);
+  plots_->SetTake(take_, std::move(loaded.series));
   playback_->SetTake(take_->frames(), take_->rate_hz, &take_->audio);  // rewinds to frame 0
   marker_combo_->clear();
   marker_combo_->addItem(tr("(none)"), -1);
   for (size_t k = 0; k < take_->marker_names.size(); ++k)
     marker_combo_->addItem(QString::fromStdString(take_->marker_names[k]), static_cast<int>(k));
   // Start with the first marker that has data, so the panel shows some motion.
-  int first_visible = -1;
-  for (int64_t k = 0; k < take_->markers.markers() && first_visible < 0; ++k) {
-    for (int64_t f = 0; f < take_->frames(); f += std::max<int64_t>(1, take_->frames() / 64)) {
-      if (take_->markers.Visible(f, k)) {
-        first_visible = static_cast<int>(k);
-        break;
-      }
-    }
-  }
+  const int first_visible = loaded.first_visible;
   if (first_visible >= 0) {
     marker_combo_->setCurrentIndex(first_visible + 1);
     OnMarkerSeriesChosen();
@@ -605,7 +623,7 @@ bool MainWindow::SetLabelTier(const QString& tier) {
     const double t0 = plots_->view_start(), t1 = plots_->view_end();
     const int marker = plots_->marker();
     const MarkerQuantity quantity = plots_->quantity();
-    plots_->SetTake(take_);
+    plots_->SetTake(take_, plots_->Shown());
     plots_->SetMarkerSeries(marker, quantity);
     plots_->SetTimeRange(t0, t1);
     plots_->SetCursorTime(playback_->time_s());

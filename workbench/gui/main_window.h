@@ -140,8 +140,8 @@ class MainWindow : public QMainWindow {
   void UpdateTitle();
   void StartTakeLoad();
   void OnTakeLoadEnded(bool ok, const QString& message);
-  void ShowLoadedTake(std::shared_ptr<const Take> take, std::optional<MarkerSet> remembered,
-                      const QString& remembered_error);
+  struct LoadedTake;
+  void ShowLoadedTake(LoadedTake loaded);
   void UpdateTakeBusy();
 
   std::unique_ptr<QSettings> settings_;
@@ -183,7 +183,6 @@ class MainWindow : public QMainWindow {
   quint64 wanted_id_ = 0;
   quint64 loading_id_ = 0;
   QString loading_name_;
-  struct LoadedTake;
   std::shared_ptr<LoadedTake> loading_result_;
   // OnUtteranceChosen's frame, applied when its take is shown.
   QString seek_take_;
