@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "io/corpus/corpus.h"
+#include "tests/gui/take_wait.h"
 #include "tests/testing/testing.h"
 #include "workbench/gui/main_window.h"
 #include "workbench/gui/playback.h"
@@ -137,7 +138,7 @@ TEST(DemoTake, OpensInTheWorkbench) {
   w.playback()->SetAudioEnabled(false);
   w.resize(1200, 800);
   w.show();
-  ASSERT_TRUE(w.OpenCorpus(QString::fromStdString(corpus)));
+  ASSERT_TRUE(OpenAndWait(&w, corpus));
   ASSERT_NE(w.take(), nullptr);
   EXPECT_EQ(w.take()->name, Demo().take.name);
   EXPECT_EQ(w.take()->frames(), Demo().take.frames());

@@ -31,6 +31,7 @@
 #include "datasets/virtual_cuer.h"
 #include "io/corpus/corpus.h"
 #include "io/models/model_file.h"
+#include "tests/gui/take_wait.h"
 #include "tests/testing/testing.h"
 #include "workbench/gui/demo_take.h"
 #include "workbench/gui/error_inspector.h"
@@ -89,7 +90,7 @@ class FitInspectTest : public ::testing::Test {
     w->show();
     QApplication::setActiveWindow(w.get());
     EXPECT_TRUE(QTest::qWaitForWindowActive(w.get()));
-    EXPECT_TRUE(w->OpenCorpus(QString::fromStdString(corpus)));
+    EXPECT_TRUE(OpenAndWait(w.get(), corpus));
     return w;
   }
 
@@ -400,6 +401,8 @@ TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
   ASSERT_EQ(chosen.count(), 1);
   EXPECT_EQ(chosen.at(0).at(0).toString().toStdString(), worst_take);
   EXPECT_EQ(chosen.at(0).at(1).toLongLong(), worst_frame);
+  // The take loads off the GUI thread; it is shown at that frame when it arrives.
+  ASSERT_TRUE(WaitForTake(w.get(), worst_take));
   ASSERT_NE(w->take(), nullptr);
   EXPECT_EQ(w->take()->name, worst_take);
   EXPECT_EQ(w->playback()->frame(), worst_frame);

@@ -26,6 +26,7 @@
 
 #include "core/file_util.h"
 #include "io/corpus/corpus.h"
+#include "tests/gui/take_wait.h"
 #include "tests/testing/testing.h"
 #include "workbench/gui/demo_take.h"
 #include "workbench/gui/label_counts.h"
@@ -115,8 +116,8 @@ class LabelLaneTest : public ::testing::Test {
     w->show();
     QApplication::setActiveWindow(w.get());
     EXPECT_TRUE(QTest::qWaitForWindowActive(w.get()));
-    EXPECT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
-    EXPECT_TRUE(w->SelectTake("alpha"));
+    EXPECT_TRUE(OpenAndWait(w.get(), corpus_));
+    EXPECT_TRUE(SelectAndWait(w.get(), "alpha"));
     EXPECT_TRUE(w->SetLabelTier(QString::fromStdString(tier)));
     w->labels()->SetAutosaveDelay(kAutosaveMs);
     w->labels()->SetRetryDelay(100);
@@ -489,7 +490,7 @@ TEST(LabelLaneDemo, TheVirtualCuersKeysTierOpensInTheLane) {
   w.playback()->SetAudioEnabled(false);
   w.resize(1200, 800);
   w.show();
-  ASSERT_TRUE(w.OpenCorpus(QString::fromStdString(corpus)));
+  ASSERT_TRUE(OpenAndWait(&w, corpus));
   const LabelSession& s = *w.labels();
   ASSERT_TRUE(s.has_take());
   EXPECT_EQ(s.tier_name(), "keys");

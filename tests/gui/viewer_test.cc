@@ -9,22 +9,28 @@
 #include <QDockWidget>
 #include <QFile>
 #include <QImage>
+#include <QProgressBar>
 #include <QProgressDialog>
 #include <QPushButton>
 #include <QSignalSpy>
+#include <QStatusBar>
 #include <QTest>
+#include <QTimer>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <semaphore>
 
 #include "core/markerset.h"
 #include "io/c3d/c3d.h"
 #include "io/corpus/corpus.h"
+#include "tests/gui/take_wait.h"
 #include "tests/testing/testing.h"
 #include "workbench/gui/corpus_browser.h"
 #include "workbench/gui/import_runner.h"
+#include "workbench/gui/job_runner.h"
 #include "workbench/gui/log_panel.h"
 #include "workbench/gui/main_window.h"
 #include "workbench/gui/marker_view.h"
@@ -127,7 +133,7 @@ class ViewerTest : public ::testing::Test {
 
 TEST_F(ViewerTest, OpenCorpusListsTakesWithTheirFacts) {
   auto w = OpenWindow();
-  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
   CorpusBrowser* b = w->browser();
   ASSERT_EQ(b->take_count(), 2);
   EXPECT_EQ(b->Cell(0, CorpusBrowser::kName), "alpha");
@@ -149,8 +155,14 @@ TEST_F(ViewerTest, OpenCorpusListsTakesWithTheirFacts) {
   EXPECT_EQ(w->plots()->lane_name(1), "words");
   EXPECT_EQ(w->plots()->lane_name(2), "cues");
   EXPECT_EQ(w->plots()->lane_kind(3), TimeSeriesPanel::LaneKind::kMarker);
-  // Selecting the other take through the browser shows it.
+  // Selecting the other take through the browser shows it when it has loaded (off the GUI thread).
+  QSignalSpy shown(w.get(), &MainWindow::TakeShown);
   b->setCurrentItem(b->topLevelItem(1));
+  EXPECT_TRUE(w->take_loading());
+  EXPECT_EQ(w->loading_take(), "beta");
+  ASSERT_TRUE(shown.wait(30000));
+  EXPECT_EQ(shown.at(0).at(0).toString(), "beta");
+  EXPECT_FALSE(w->take_loading());
   ASSERT_TRUE(w->take());
   EXPECT_EQ(w->take()->name, "beta");
   EXPECT_EQ(w->marker_view()->DrawnMarkerCount(), 2);
@@ -159,8 +171,8 @@ TEST_F(ViewerTest, OpenCorpusListsTakesWithTheirFacts) {
 
 TEST_F(ViewerTest, KeyboardStepsKeepViewAndPlotsOnTheSameFrame) {
   auto w = OpenWindow();
-  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
-  ASSERT_TRUE(w->SelectTake("alpha"));
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
+  ASSERT_TRUE(SelectAndWait(w.get(), "alpha"));
   w->quantity_combo()->setCurrentIndex(2);  // z
   w->plots()->SetMarkerSeries(0, MarkerQuantity::kZ);
   MarkerView* view = w->marker_view();
@@ -224,7 +236,7 @@ TEST_F(ViewerTest, KeyboardStepsKeepViewAndPlotsOnTheSameFrame) {
 
 TEST_F(ViewerTest, PlaybackRunsAtTheCaptureRateAndStopsAtTheEnd) {
   auto w = OpenWindow();
-  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
   QElapsedTimer clock;
   clock.start();
   QTest::keyClick(w.get(), Qt::Key_Space);
@@ -247,10 +259,10 @@ TEST_F(ViewerTest, PlaybackRunsAtTheCaptureRateAndStopsAtTheEnd) {
 // take's frame for the new take's cursor and paged the plots off the start.
 TEST_F(ViewerTest, SwitchingTakesRewindsAndShowsTheWholeNewTake) {
   auto w = OpenWindow();
-  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
   w->playback()->Seek(45);
   w->plots()->SetTimeRange(0.3, 0.5);
-  ASSERT_TRUE(w->SelectTake("beta"));
+  ASSERT_TRUE(SelectAndWait(w.get(), "beta"));
   EXPECT_EQ(w->playback()->frame(), 0);
   EXPECT_EQ(w->marker_view()->frame(), 0);
   EXPECT_DOUBLE_EQ(w->plots()->cursor_time(), 0.0);
@@ -258,9 +270,148 @@ TEST_F(ViewerTest, SwitchingTakesRewindsAndShowsTheWholeNewTake) {
   EXPECT_DOUBLE_EQ(w->plots()->view_end(), 0.5);  // 30 frames at 60 Hz
 }
 
+// Issue 16: the GUI thread never waits on HDF5. A take chosen in the browser
+// loads on a worker thread, held here before it reads the corpus: meanwhile the
+// event loop runs (a timer ticks, the 3D view repaints, a key steps the shown
+// take) and the status bar shows the load as busy; released, the take shows.
+// A later selection supersedes a load still running (its take is never
+// shown); a take that cannot be loaded is logged, without a modal dialog.
+TEST_F(ViewerTest, ATakeLoadsOffTheGuiThreadWhileTheWindowKeepsRunning) {
+  auto w = OpenWindow();
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
+  ASSERT_EQ(w->take()->name, "alpha");
+
+  // Holds the loader's worker before it reads the corpus, once, until released.
+  struct Hold {
+    std::atomic<bool> reached{false};
+    std::atomic<bool> done{false};
+    std::binary_semaphore resume{0};
+    bool given = false;
+    void Release() {
+      if (given) return;
+      given = true;
+      resume.release();
+    }
+  };
+  auto hold = std::make_shared<Hold>();
+  struct Guard {
+    std::shared_ptr<Hold> hold;
+    ~Guard() {
+      if (hold->reached.load()) hold->Release();
+    }
+  } guard{hold};
+  w->take_loader()->SetWorkerHook([hold](const std::string& stage, double fraction) {
+    if (hold->done.load() || stage != "loading take" || fraction != 0.0) return;
+    hold->reached = true;
+    hold->resume.acquire();
+    hold->done = true;
+  });
+
+  // Event-loop witnesses: a 5 ms timer (the longest gap between its ticks) and the 3D view's paints.
+  struct Paints : QObject {
+    int count = 0;
+    bool eventFilter(QObject*, QEvent* e) override {
+      count += e->type() == QEvent::Paint;
+      return false;
+    }
+  } paints;
+  w->marker_view()->installEventFilter(&paints);
+  QElapsedTimer clock;
+  qint64 last_tick = 0, max_gap_ms = 0;
+  int ticks = 0;
+  QTimer timer;
+  timer.setInterval(5);
+  QObject::connect(&timer, &QTimer::timeout, [&] {
+    const qint64 now = clock.elapsed();
+    max_gap_ms = std::max(max_gap_ms, now - last_tick);
+    last_tick = now;
+    ++ticks;
+  });
+  clock.start();
+  timer.start();
+
+  QSignalSpy shown(w.get(), &MainWindow::TakeShown);
+  CorpusBrowser* b = w->browser();
+  b->setCurrentItem(b->topLevelItem(1));  // beta
+  EXPECT_TRUE(w->take_loading());
+  EXPECT_EQ(w->loading_take(), "beta");
+  auto* busy = w->findChild<QProgressBar*>("takeLoadBusy");
+  ASSERT_NE(busy, nullptr);
+  EXPECT_TRUE(busy->isVisible());
+  EXPECT_TRUE(w->statusBar()->currentMessage().contains("Loading take beta"))
+      << w->statusBar()->currentMessage().toStdString();
+  ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, 20000));
+  // Held: the loop keeps running and the window keeps working on the shown take.
+  const int ticks_before = ticks, paints_before = paints.count;
+  w->marker_view()->update();
+  EXPECT_TRUE(QTest::qWaitFor([&] { return ticks >= ticks_before + 10 && paints.count > paints_before; }, 5000))
+      << ticks - ticks_before << " ticks, " << paints.count - paints_before << " paints";
+  QTest::keyClick(w.get(), Qt::Key_Right);
+  EXPECT_EQ(w->marker_view()->frame(), 1);
+  ASSERT_EQ(w->take()->name, "alpha");  // not shown before it has loaded
+  EXPECT_EQ(shown.count(), 0);
+  EXPECT_TRUE(w->take_loading());
+  // Released: beta shows, rewound, and the busy indication goes.
+  hold->Release();
+  ASSERT_TRUE(shown.wait(20000));
+  EXPECT_EQ(shown.at(0).at(0).toString(), "beta");
+  EXPECT_EQ(w->take()->name, "beta");
+  EXPECT_EQ(w->marker_view()->DrawnMarkerCount(), 2);
+  EXPECT_EQ(w->marker_view()->frame(), 0);
+  EXPECT_FALSE(w->take_loading());
+  EXPECT_FALSE(busy->isVisible());
+  EXPECT_GE(ticks, ticks_before + 10);
+  // A loose bound (offscreen, on a loaded machine): the loop never stalled for long.
+  EXPECT_LT(max_gap_ms, 1000);
+
+  // A later selection supersedes an earlier one still loading: alpha's load
+  // is held, beta (shown) is chosen again, then alpha is released: alpha is
+  // never shown.
+  shown.clear();
+  hold = std::make_shared<Hold>();
+  guard.hold = hold;
+  w->take_loader()->SetWorkerHook([hold](const std::string& stage, double fraction) {
+    if (hold->done.load() || stage != "loading take" || fraction != 0.0) return;
+    hold->reached = true;
+    hold->resume.acquire();
+    hold->done = true;
+  });
+  ASSERT_TRUE(w->SelectTake("alpha"));
+  ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, 20000));
+  ASSERT_TRUE(w->SelectTake("beta"));
+  EXPECT_FALSE(w->take_loading());
+  hold->Release();
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !w->take_loader()->running(); }, 20000));
+  QTest::qWait(0);  // the loader's end is a queued call
+  QCoreApplication::processEvents();
+  EXPECT_EQ(shown.count(), 0);
+  EXPECT_EQ(w->take()->name, "beta");
+  EXPECT_EQ(b->current_take(), "beta");
+  // Then alpha, chosen twice in a row, loads once and shows.
+  w->take_loader()->SetWorkerHook(nullptr);
+  ASSERT_TRUE(w->SelectTake("alpha"));
+  ASSERT_TRUE(w->SelectTake("alpha"));
+  ASSERT_TRUE(WaitForTake(w.get(), "alpha"));
+  EXPECT_EQ(shown.count(), 1);
+
+  // A take that cannot be loaded: an error in the log and the status line, no modal dialog, alpha stays.
+  QSignalSpy failed(w.get(), &MainWindow::TakeLoadFailed);
+  const int errors = w->log()->CountLevel(LogPanel::Level::kError);
+  ASSERT_TRUE(w->SelectTake("no_such_take"));
+  ASSERT_TRUE(failed.wait(20000));
+  EXPECT_EQ(failed.at(0).at(0).toString(), "no_such_take");
+  EXPECT_EQ(w->log()->CountLevel(LogPanel::Level::kError), errors + 1);
+  EXPECT_TRUE(w->log()->entries().back().contains("no_such_take"));
+  EXPECT_TRUE(w->statusBar()->currentMessage().contains("Cannot load take no_such_take"));
+  EXPECT_EQ(QApplication::activeModalWidget(), nullptr);
+  EXPECT_EQ(w->take()->name, "alpha");
+  EXPECT_FALSE(w->take_loading());
+  w->marker_view()->removeEventFilter(&paints);
+}
+
 TEST_F(ViewerTest, ClickingAMarkerShowsItsNameAndCoordinates) {
   auto w = OpenWindow();
-  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
   w->playback()->Seek(7);
   MarkerView* view = w->marker_view();
   auto pos = view->MarkerScreenPos(1);
@@ -296,7 +447,7 @@ TEST_F(ViewerTest, SticksAndClusterFramesFromTheMarkerSet) {
   std::ofstream(set_path) << MarkerSetToJson(set);
   auto w = OpenWindow();
   ASSERT_TRUE(w->LoadMarkerSetFile(QString::fromStdString(set_path.string())));
-  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
   w->playback()->Seek(5);
   EXPECT_EQ(w->marker_view()->DrawnStickCount(), 2);
   EXPECT_EQ(w->marker_view()->DrawnClusterFrameCount(), 1);
@@ -336,7 +487,7 @@ TEST(MarkerSeriesTest, SpeedOfAConstantVelocityMarker) {
 
 TEST_F(ViewerTest, ZoomIsSharedByAllLanes) {
   auto w = OpenWindow();
-  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
   TimeSeriesPanel* plots = w->plots();
   ASSERT_GE(plots->lane_count(), 3);
   EXPECT_DOUBLE_EQ(plots->view_start(), 0.0);
@@ -370,7 +521,7 @@ TEST_F(ViewerTest, ZoomIsSharedByAllLanes) {
 
 TEST_F(ViewerTest, FiguresExportAsPngSvgAndPdf) {
   auto w = OpenWindow();
-  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
   QString png = QString::fromStdString((dir_ / "plots.png").string());
   QString svg = QString::fromStdString((dir_ / "plots.svg").string());
   QString pdf = QString::fromStdString((dir_ / "plots.pdf").string());
@@ -427,7 +578,7 @@ TEST_F(ViewerTest, CancellingABackgroundImportMidwayLeavesTheCorpusUnchanged) {
     WriteC3d(files.back(), t);
   }
   auto w = OpenWindow();
-  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
   std::atomic<bool> reached{false};
   std::atomic<double> reached_fraction{0};
   std::binary_semaphore resume(0);
@@ -472,7 +623,7 @@ TEST_F(ViewerTest, CancellingABackgroundImportMidwayLeavesTheCorpusUnchanged) {
 
 TEST_F(ViewerTest, DamagedOrForeignFilesAreLoggedAndTheAppStaysUsable) {
   auto w = OpenWindow();
-  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+  ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
   fs::path foreign = dir_ / "notes.h5";
   std::ofstream(foreign) << "this is a text file, not HDF5\n";
   EXPECT_FALSE(w->OpenCorpus(QString::fromStdString(foreign.string())));
@@ -480,7 +631,7 @@ TEST_F(ViewerTest, DamagedOrForeignFilesAreLoggedAndTheAppStaysUsable) {
   EXPECT_TRUE(w->log()->entries().back().contains("notes.h5"));
   // Still on the previous corpus, still working.
   EXPECT_EQ(w->corpus_path().toStdString(), corpus_);
-  EXPECT_TRUE(w->SelectTake("beta"));
+  EXPECT_TRUE(SelectAndWait(w.get(), "beta"));
   QTest::keyClick(w.get(), Qt::Key_Right);
   EXPECT_EQ(w->marker_view()->frame(), 1);
 
@@ -504,13 +655,13 @@ TEST_F(ViewerTest, DamagedOrForeignFilesAreLoggedAndTheAppStaysUsable) {
   EXPECT_TRUE(w->log()->entries().back().startsWith("error: Import failed:"));
   EXPECT_TRUE(w->log()->entries().back().contains("broken.c3d"));
   EXPECT_EQ(TakeNames(), (std::vector<std::string>{"alpha", "beta"}));
-  EXPECT_TRUE(w->SelectTake("alpha"));
+  EXPECT_TRUE(SelectAndWait(w.get(), "alpha"));
 }
 
 TEST_F(ViewerTest, LayoutAndRecentFilesAreRemembered) {
   {
     auto w = OpenWindow();
-    ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(corpus_)));
+    ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
     w->log_dock()->hide();
     w->close();
   }

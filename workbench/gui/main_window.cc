@@ -16,6 +16,7 @@
 #include <QLineEdit>
 #include <QListWidget>
 #include <QMenuBar>
+#include <QProgressBar>
 #include <QProgressDialog>
 #include <QPushButton>
 #include <QSettings>
@@ -32,6 +33,7 @@
 #include "workbench/gui/figure_export.h"
 #include "workbench/gui/fit_dialog.h"
 #include "workbench/gui/import_runner.h"
+#include "workbench/gui/job_runner.h"
 #include "workbench/gui/label_counts.h"
 #include "workbench/gui/label_lane.h"
 #include "workbench/gui/label_session.h"
@@ -160,7 +162,26 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   playback_ = new Playback(this);
   import_runner_ = new ImportRunner(this);
   frame_label_ = new QLabel(this);
+  // Busy while a selected take loads (SelectTake); the window stays usable.
+  auto* busy = new QProgressBar(this);
+  busy->setObjectName("takeLoadBusy");
+  busy->setRange(0, 0);
+  busy->setMaximumWidth(120);
+  busy->setTextVisible(false);
+  busy->hide();
+  take_busy_ = busy;
+  statusBar()->addPermanentWidget(take_busy_);
   statusBar()->addPermanentWidget(frame_label_);
+  take_loader_ = new JobRunner(QStringLiteral("csw-take-load"), this);
+  connect(take_loader_, &JobRunner::Succeeded, this, [this] { OnTakeLoadEnded(true, QString()); });
+  connect(take_loader_, &JobRunner::Failed, this, [this](const QString& message) { OnTakeLoadEnded(false, message); });
+  connect(take_loader_, &JobRunner::Canceled, this, [this] {
+    // Only a superseded load is cancelled: its take is dropped, the latest selection loads.
+    loading_result_.reset();
+    loading_name_.clear();
+    StartTakeLoad();
+    UpdateTakeBusy();
+  });
 
   connect(browser_, &CorpusBrowser::TakeSelected, this, [this](const QString& name) { SelectTake(name); });
   connect(playback_, &Playback::FrameChanged, this, &MainWindow::OnFrameChanged);
@@ -330,6 +351,7 @@ void MainWindow::closeEvent(QCloseEvent* event) {
     std::fprintf(stderr, "csw-workbench: %s\n", qPrintable(m));
   }
   import_runner_->Cancel();
+  take_loader_->Cancel();
   if (fit_dialog_ != nullptr) fit_dialog_->CancelFit();
   error_inspector_->Cancel();
   SaveLayout();
@@ -373,6 +395,14 @@ bool MainWindow::OpenCorpus(const QString& path) {
     std::vector<TakeSummary> takes = corpus.Takes();
     corpus_ = corpus;
     take_.reset();
+    // A take still loading from the corpus shown before ends unseen.
+    if (!wanted_take_.isEmpty()) {
+      wanted_take_.clear();
+      ++wanted_id_;
+      take_loader_->Cancel();
+      UpdateTakeBusy();
+    }
+    seek_frame_ = -1;
     labels_->ForgetSaved();
     labels_->SetTake(std::string(), nullptr, label_tier_combo_->currentText().toStdString());
     marker_view_->SetTake(nullptr);
@@ -392,31 +422,145 @@ bool MainWindow::OpenCorpus(const QString& path) {
   }
 }
 
+// What the take loader's worker hands to the GUI thread.
+struct MainWindow::LoadedTake {
+  std::shared_ptr<const Take> take;
+  std::optional<MarkerSet> remembered;  // the marker set the take remembers, parsed
+  QString remembered_error;             // why it is not usable, "" when fine
+  TimeSeriesPanel::Prepared series;     // the plots' audio and first marker lane
+  int first_visible = -1;               // FirstVisibleMarker
+};
+
+namespace {
+// The first marker with data in a take (sampled over 64 frames), -1 when none.
+int FirstVisibleMarker(const Take& take) {
+  for (int64_t k = 0; k < take.markers.markers(); ++k) {
+    for (int64_t f = 0; f < take.frames(); f += std::max<int64_t>(1, take.frames() / 64)) {
+      if (take.markers.Visible(f, k)) return static_cast<int>(k);
+    }
+  }
+  return -1;
+}
+}  // namespace
+
 bool MainWindow::SelectTake(const QString& name) {
   if (!corpus_) return false;
-  if (take_ && QString::fromStdString(take_->name) == name) return true;
-  std::shared_ptr<const Take> take;
-  try {
-    Take loaded = corpus_->LoadTake(name.toStdString());
-    // Labels this session saved (or is saving) are newer than what the open corpus holds.
-    if (auto tiers = labels_->KnownTiers(corpus_->path(), loaded.name)) loaded.tiers = std::move(*tiers);
-    take = std::make_shared<const Take>(std::move(loaded));
-  } catch (const std::exception& e) {
-    log_->Error(tr("Cannot load take %1: %2").arg(name, QString::fromStdString(e.what())));
-    return false;
+  if (name != seek_take_) seek_frame_ = -1;
+  if (take_ && QString::fromStdString(take_->name) == name) {
+    // A load still running for another selection is superseded: it ends unseen.
+    if (!wanted_take_.isEmpty()) {
+      wanted_take_.clear();
+      ++wanted_id_;
+      take_loader_->Cancel();
+      UpdateTakeBusy();
+    }
+    return true;
+  }
+  if (take_loader_->running() && loading_name_ == name) {
+    // Already loading this very take: it stays the one to show.
+    wanted_take_ = name;
+    wanted_id_ = loading_id_;
+    UpdateTakeBusy();
+    return true;
+  }
+  wanted_take_ = name;
+  ++wanted_id_;
+  if (take_loader_->running()) {
+    take_loader_->Cancel();  // stops it before the read when it has not begun; its end starts this one
+  } else {
+    StartTakeLoad();
+  }
+  UpdateTakeBusy();
+  return true;
+}
+
+void MainWindow::StartTakeLoad() {
+  if (wanted_take_.isEmpty() || !corpus_ || take_loader_->running()) return;
+  loading_name_ = wanted_take_;
+  loading_id_ = wanted_id_;
+  auto out = std::make_shared<LoadedTake>();
+  loading_result_ = out;
+  const Corpus corpus = *corpus_;  // a copy sharing the open file (HDF5 calls are serialized)
+  const std::string name = loading_name_.toStdString();
+  const bool parse_set = !marker_set_;
+  const auto quantity = static_cast<MarkerQuantity>(quantity_combo_->currentData().toInt());
+  take_loader_->Start([corpus, name, out, parse_set, quantity](Progress& progress) {
+    progress.Update("loading take", 0.0);
+    auto take = std::make_shared<const Take>(corpus.LoadTake(name));
+    // What grows with the take is prepared here too: the plots' audio and
+    // first marker lane (the first marker with data, so the panel shows some motion).
+    out->series.audio = TimeSeriesPanel::AudioSeries(*take);
+    out->first_visible = FirstVisibleMarker(*take);
+    if (out->first_visible >= 0) {
+      out->series.marker = out->first_visible;
+      out->series.quantity = quantity;
+      out->series.series = TimeSeriesPanel::MarkerLaneSeries(*take, out->first_visible, quantity);
+    }
+    if (parse_set && !take->markerset_json.empty()) {
+      try {
+        out->remembered = ParseMarkerSet(take->markerset_json, corpus.path() + ": take " + take->name);
+      } catch (const std::exception& e) {
+        out->remembered_error = QString::fromStdString(e.what());
+      }
+    }
+    out->take = std::move(take);
+    progress.Update("loading take", 1.0);
+  });
+  statusBar()->showMessage(tr("Loading take %1…").arg(loading_name_));
+}
+
+void MainWindow::OnTakeLoadEnded(bool ok, const QString& message) {
+  std::shared_ptr<LoadedTake> result = std::move(loading_result_);
+  const QString name = loading_name_;
+  const bool current = loading_id_ == wanted_id_ && !wanted_take_.isEmpty();
+  loading_name_.clear();
+  if (!current) {
+    // Superseded: never shown. The latest selection, if any, loads now.
+    StartTakeLoad();
+    UpdateTakeBusy();
+    return;
+  }
+  wanted_take_.clear();
+  UpdateTakeBusy();
+  if (!ok || !result || !result->take) {
+    const QString why = ok ? tr("no take read") : message;
+    log_->Error(tr("Cannot load take %1: %2").arg(name, why));
+    statusBar()->showMessage(tr("Cannot load take %1 — see the log").arg(name), 8000);
+    seek_frame_ = -1;
+    emit TakeLoadFailed(name, why);
+    return;
+  }
+  ShowLoadedTake(std::move(*result));
+}
+
+void MainWindow::UpdateTakeBusy() {
+  const bool busy = !wanted_take_.isEmpty();
+  take_busy_->setVisible(busy);
+  take_busy_->setToolTip(busy ? tr("Loading take %1…").arg(wanted_take_) : QString());
+  if (busy) {
+    statusBar()->showMessage(tr("Loading take %1…").arg(wanted_take_));
+  } else if (statusBar()->currentMessage().startsWith(tr("Loading take"))) {
+    statusBar()->clearMessage();
+  }
+}
+
+void MainWindow::ShowLoadedTake(LoadedTake loaded) {
+  std::shared_ptr<const Take> take = std::move(loaded.take);
+  const std::optional<MarkerSet>& remembered = loaded.remembered;
+  const QString& remembered_error = loaded.remembered_error;
+  const QString name = QString::fromStdString(take->name);
+  // Labels this session saved (or is saving) are newer than what the open corpus holds.
+  if (auto tiers = labels_->KnownTiers(corpus_->path(), take->name)) {
+    auto copy = std::make_shared<Take>(*take);
+    copy->tiers = std::move(*tiers);
+    take = std::move(copy);
   }
   playback_->Pause();
   take_ = take;
   // A marker set loaded by the user wins; otherwise the one the take was
   // imported with (the corpus remembers it), so sticks and frames show at once.
-  std::optional<MarkerSet> remembered;
-  if (!marker_set_ && !take_->markerset_json.empty()) {
-    try {
-      remembered = ParseMarkerSet(take_->markerset_json, corpus_->path() + ": take " + take_->name);
-    } catch (const std::exception& e) {
-      log_->Warning(tr("Marker set remembered by %1 not usable: %2").arg(name, QString::fromStdString(e.what())));
-    }
-  }
+  if (!remembered_error.isEmpty() && !marker_set_)
+    log_->Warning(tr("Marker set remembered by %1 not usable: %2").arg(name, remembered_error));
   const MarkerSet* set = marker_set_ ? &*marker_set_ : (remembered ? &*remembered : nullptr);
   try {
     marker_view_->SetTake(take_, set);
@@ -425,22 +569,14 @@ bool MainWindow::SelectTake(const QString& name) {
     marker_view_->SetTake(take_, nullptr);
   }
   plots_->SetHiddenTier(label_tier_combo_->currentText().trimmed());  // drawn by the label lane instead
-  plots_->SetTake(take_);
+  plots_->SetTake(take_, std::move(loaded.series));
   playback_->SetTake(take_->frames(), take_->rate_hz, &take_->audio);  // rewinds to frame 0
   marker_combo_->clear();
   marker_combo_->addItem(tr("(none)"), -1);
   for (size_t k = 0; k < take_->marker_names.size(); ++k)
     marker_combo_->addItem(QString::fromStdString(take_->marker_names[k]), static_cast<int>(k));
   // Start with the first marker that has data, so the panel shows some motion.
-  int first_visible = -1;
-  for (int64_t k = 0; k < take_->markers.markers() && first_visible < 0; ++k) {
-    for (int64_t f = 0; f < take_->frames(); f += std::max<int64_t>(1, take_->frames() / 64)) {
-      if (take_->markers.Visible(f, k)) {
-        first_visible = static_cast<int>(k);
-        break;
-      }
-    }
-  }
+  const int first_visible = loaded.first_visible;
   if (first_visible >= 0) {
     marker_combo_->setCurrentIndex(first_visible + 1);
     OnMarkerSeriesChosen();
@@ -453,8 +589,13 @@ bool MainWindow::SelectTake(const QString& name) {
   SetLabelTier(label_tier_combo_->currentText());
   UpdateTitle();
   OnFrameChanged(playback_->frame());
+  if (seek_frame_ >= 0 && seek_take_ == name) {
+    const qint64 frame = seek_frame_;
+    seek_frame_ = -1;
+    playback_->Seek(frame);
+    log_->Info(tr("%1: worst frame %2").arg(name).arg(frame + take_->first_frame));
+  }
   emit TakeShown(name);
-  return true;
 }
 
 bool MainWindow::SetLabelTier(const QString& tier) {
@@ -482,7 +623,7 @@ bool MainWindow::SetLabelTier(const QString& tier) {
     const double t0 = plots_->view_start(), t1 = plots_->view_end();
     const int marker = plots_->marker();
     const MarkerQuantity quantity = plots_->quantity();
-    plots_->SetTake(take_);
+    plots_->SetTake(take_, plots_->Shown());
     plots_->SetMarkerSeries(marker, quantity);
     plots_->SetTimeRange(t0, t1);
     plots_->SetCursorTime(playback_->time_s());
@@ -692,8 +833,14 @@ void MainWindow::ChooseAndInspectErrors() {
 }
 
 void MainWindow::OnUtteranceChosen(const QString& take, qint64 frame) {
-  if (!SelectTake(take)) return;
   playback_->Pause();
+  seek_take_ = take;
+  if (!SelectTake(take)) return;
+  if (take_loading()) {
+    seek_frame_ = frame;  // applied when the take is shown
+    return;
+  }
+  seek_frame_ = -1;
   playback_->Seek(frame);
   log_->Info(tr("%1: worst frame %2").arg(take).arg(frame + take_->first_frame));
 }

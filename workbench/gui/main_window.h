@@ -25,6 +25,7 @@ class CorpusBrowser;
 class ErrorInspector;
 class FitDialog;
 class ImportRunner;
+class JobRunner;
 class LabelCountsPanel;
 class LabelLane;
 class LabelSession;
@@ -44,8 +45,20 @@ class MainWindow : public QMainWindow {
 
   // Opens a corpus; on failure logs the error, keeps the current corpus and returns false.
   bool OpenCorpus(const QString& path);
-  // Loads and shows one take of the open corpus; false (and a log line) on failure.
+  // Shows one take of the open corpus: loads it on a worker thread (the GUI
+  // thread never waits on HDF5) with a busy indication in the status bar, and
+  // shows it when it arrives (TakeShown). A later selection supersedes one
+  // still loading, whose take is then never shown. A failure goes to the log
+  // and the status line (TakeLoadFailed), the shown take staying. False when
+  // no corpus is open; true at once when the take is already shown.
   bool SelectTake(const QString& name);
+  // A selection is loading (or waits for the load it superseded to end).
+  bool take_loading() const { return !wanted_take_.isEmpty(); }
+  // The take being loaded for the latest selection, "" when none.
+  QString loading_take() const { return wanted_take_; }
+  // The take loader's runner: its worker hook (JobRunner::SetWorkerHook) sees
+  // the stage "loading take" at 0 before the corpus is read and at 1 after.
+  JobRunner* take_loader() const { return take_loader_; }
   // Loads a marker-set JSON for sticks and cluster frames; false (and a log line) on failure.
   bool LoadMarkerSetFile(const QString& path);
   // Starts the import job in the background (progress dialog with Cancel).
@@ -102,6 +115,7 @@ class MainWindow : public QMainWindow {
 
  signals:
   void TakeShown(const QString& name);
+  void TakeLoadFailed(const QString& name, const QString& message);
   void ImportFinished();
 
  protected:
@@ -124,6 +138,11 @@ class MainWindow : public QMainWindow {
   void ChooseAndInspectErrors();
   void OnUtteranceChosen(const QString& take, qint64 frame);
   void UpdateTitle();
+  void StartTakeLoad();
+  void OnTakeLoadEnded(bool ok, const QString& message);
+  struct LoadedTake;
+  void ShowLoadedTake(LoadedTake loaded);
+  void UpdateTakeBusy();
 
   std::unique_ptr<QSettings> settings_;
   std::optional<Corpus> corpus_;
@@ -155,6 +174,19 @@ class MainWindow : public QMainWindow {
   QMenu* recent_menu_ = nullptr;
   QLabel* frame_label_ = nullptr;
   QAction* play_action_ = nullptr;
+  // Take loading (SelectTake): one load at a time on take_loader_; the latest
+  // selection not yet shown waits in wanted_take_ (request wanted_id_). A
+  // load whose request id is no longer wanted_id_ ends unseen.
+  JobRunner* take_loader_ = nullptr;
+  QWidget* take_busy_ = nullptr;
+  QString wanted_take_;
+  quint64 wanted_id_ = 0;
+  quint64 loading_id_ = 0;
+  QString loading_name_;
+  std::shared_ptr<LoadedTake> loading_result_;
+  // OnUtteranceChosen's frame, applied when its take is shown.
+  QString seek_take_;
+  qint64 seek_frame_ = -1;
   bool close_requested_ = false;
 };
 

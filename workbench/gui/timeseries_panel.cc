@@ -168,21 +168,49 @@ TimeSeriesPanel::TimeSeriesPanel(QWidget* parent) : QWidget(parent) {
 
 TimeSeriesPanel::~TimeSeriesPanel() = default;
 
-void TimeSeriesPanel::SetTake(std::shared_ptr<const Take> take) {
-  take_ = std::move(take);
-  audio_.reset();
-  if (take_ && !take_->audio.samples.empty() && take_->audio.channels > 0) {
-    // Built once per take (a 10-minute take at 16 kHz has ~10 M samples), shared by rebuilds.
-    const Audio& a = take_->audio;
-    std::vector<float> mono(static_cast<size_t>(a.frames()));
-    for (int64_t i = 0; i < a.frames(); ++i) {
-      float s = 0;
-      for (int c = 0; c < a.channels; ++c) s += a.samples[static_cast<size_t>(i * a.channels + c)];
-      mono[static_cast<size_t>(i)] = s / static_cast<float>(a.channels);
-    }
-    audio_ = std::make_shared<const MinMaxPyramid>(std::move(mono), a.rate_hz);
+std::shared_ptr<const MinMaxPyramid> TimeSeriesPanel::AudioSeries(const Take& take) {
+  if (take.audio.samples.empty() || take.audio.channels <= 0) return nullptr;
+  // Built once per take (a 10-minute take at 16 kHz has ~10 M samples), shared by rebuilds.
+  const Audio& a = take.audio;
+  std::vector<float> mono(static_cast<size_t>(a.frames()));
+  for (int64_t i = 0; i < a.frames(); ++i) {
+    float s = 0;
+    for (int c = 0; c < a.channels; ++c) s += a.samples[static_cast<size_t>(i * a.channels + c)];
+    mono[static_cast<size_t>(i)] = s / static_cast<float>(a.channels);
   }
-  marker_ = -1;
+  return std::make_shared<const MinMaxPyramid>(std::move(mono), a.rate_hz);
+}
+
+std::shared_ptr<const MinMaxPyramid> TimeSeriesPanel::MarkerLaneSeries(const Take& take, int marker, MarkerQuantity q) {
+  return std::make_shared<const MinMaxPyramid>(MarkerSeries(take, marker, q), take.rate_hz);
+}
+
+TimeSeriesPanel::Prepared TimeSeriesPanel::Shown() const {
+  Prepared shown;
+  shown.audio = audio_;
+  for (const auto& lane : lanes_) {
+    if (lane->kind != LaneKind::kMarker || !lane->series) continue;
+    shown.marker = marker_;
+    shown.quantity = quantity_;
+    shown.series = lane->series;
+  }
+  return shown;
+}
+
+void TimeSeriesPanel::SetTake(std::shared_ptr<const Take> take) {
+  Prepared prepared;
+  if (take) prepared.audio = AudioSeries(*take);
+  SetTake(std::move(take), std::move(prepared));
+}
+
+void TimeSeriesPanel::SetTake(std::shared_ptr<const Take> take, Prepared prepared) {
+  take_ = std::move(take);
+  audio_ = take_ ? std::move(prepared.audio) : nullptr;
+  prepared_ = take_ ? std::move(prepared) : Prepared();
+  prepared_.audio.reset();
+  // A prepared marker series is shown at once (one rebuild, not two).
+  marker_ = prepared_.series && prepared_.marker < (take_ ? take_->markers.markers() : 0) ? prepared_.marker : -1;
+  if (marker_ >= 0) quantity_ = prepared_.quantity;
   cursor_t_ = 0.0;
   Rebuild();
 }
@@ -311,7 +339,9 @@ void TimeSeriesPanel::Rebuild() {
     QString name = QString::fromStdString(take_->marker_names[static_cast<size_t>(marker_)]);
     Lane& lane = AddLane(LaneKind::kMarker, name + " " + QuantityName(quantity_), 1.4);
     lane.unit = quantity_ == MarkerQuantity::kSpeed ? "mm/s" : "mm";
-    lane.series = std::make_shared<const MinMaxPyramid>(MarkerSeries(*take_, marker_, quantity_), take_->rate_hz);
+    lane.series = prepared_.series && prepared_.marker == marker_ && prepared_.quantity == quantity_
+                      ? prepared_.series
+                      : MarkerLaneSeries(*take_, marker_, quantity_);
     lane.graph = plot_->addGraph(lane.rect->axis(QCPAxis::atBottom), lane.rect->axis(QCPAxis::atLeft));
     lane.graph->setPen(QPen(QColor(30, 130, 60), 1.3));
     lane.graph->setAdaptiveSampling(false);

@@ -40,6 +40,23 @@ class TimeSeriesPanel : public QWidget {
 
   // Shows a take's audio and tiers (nullptr clears); the view spans the take.
   void SetTake(std::shared_ptr<const Take> take);
+  // Series prepared off the GUI thread for a take about to be shown (their
+  // costs grow with the take: ~10 M audio samples for 10 minutes at 16 kHz).
+  struct Prepared {
+    std::shared_ptr<const MinMaxPyramid> audio;  // AudioSeries(take)
+    int marker = -1;                             // a marker lane's series, when series is set
+    MarkerQuantity quantity = MarkerQuantity::kZ;
+    std::shared_ptr<const MinMaxPyramid> series;  // MarkerLaneSeries(take, marker, quantity)
+  };
+  // The same, with the take's series prepared (any thread) by the functions
+  // below; a prepared marker series shows its marker lane at once.
+  void SetTake(std::shared_ptr<const Take> take, Prepared prepared);
+  // The series shown now (to show the same take again, e.g. with other tiers).
+  Prepared Shown() const;
+  // The audio lane's series (channels averaged); null without audio.
+  static std::shared_ptr<const MinMaxPyramid> AudioSeries(const Take& take);
+  // A marker lane's series.
+  static std::shared_ptr<const MinMaxPyramid> MarkerLaneSeries(const Take& take, int marker, MarkerQuantity q);
   // Adds (or replaces) the marker lane; marker < 0 removes it.
   void SetMarkerSeries(int marker, MarkerQuantity quantity);
   int marker() const { return marker_; }
@@ -103,6 +120,7 @@ class TimeSeriesPanel : public QWidget {
   QCPMarginGroup* margins_ = nullptr;
   std::shared_ptr<const Take> take_;
   std::shared_ptr<const MinMaxPyramid> audio_;  // the take's audio (channels averaged)
+  Prepared prepared_;                           // a marker series prepared with the take
   std::vector<std::unique_ptr<Lane>> lanes_;
   int marker_ = -1;
   QString hidden_tier_;

@@ -34,6 +34,24 @@ namespace csw::gui {
 
 namespace {
 
+// Runs the event loop until the window's take selection is shown (or failed):
+// the window loads takes off the GUI thread.
+void WaitForTake(MainWindow& window, int timeout_ms = 60000) {
+  if (!window.take_loading()) return;
+  QEventLoop loop;
+  QTimer timeout;
+  timeout.setSingleShot(true);
+  QObject::connect(&timeout, &QTimer::timeout, &loop, &QEventLoop::quit);
+  QObject::connect(&window, &MainWindow::TakeShown, &loop, [&] {
+    if (!window.take_loading()) loop.quit();
+  });
+  QObject::connect(&window, &MainWindow::TakeLoadFailed, &loop, [&] {
+    if (!window.take_loading()) loop.quit();
+  });
+  timeout.start(timeout_ms);
+  loop.exec();
+}
+
 // Lets layouts, queued replots and paints settle before a screenshot (tour only).
 void Settle(int ms = 150) {
   QEventLoop loop;
@@ -81,6 +99,7 @@ QStringList RunTour(const TourOptions& options) {
   window.playback()->SetAudioEnabled(false);
   window.LoadMarkerSetFile(set_path);
   if (!window.OpenCorpus(corpus)) throw Error("tour: cannot open the demo corpus");
+  WaitForTake(window);
 
   // 2. Captures through the background import job (File > Import does the same).
   QStringList imported;
@@ -97,7 +116,9 @@ QStringList RunTour(const TourOptions& options) {
 
   // 3. The main window on the demo take: the picked index fingertip, its speed,
   // at the middle key's placement target.
+  WaitForTake(window);
   window.browser()->SelectTake(QString::fromStdString(demo.name));
+  WaitForTake(window);
   std::shared_ptr<const Take> take = window.take();
   if (!take) throw Error("tour: the demo take did not load");
   int tip = static_cast<int>(take->MarkerIndex("ITIP"));
@@ -141,6 +162,7 @@ QStringList RunTour(const TourOptions& options) {
   int shot = 4;
   for (const QString& name : {imported.value(0), QStringLiteral("Facial-Sing")}) {
     if (name.isEmpty() || !imported.contains(name) || !window.browser()->SelectTake(name)) continue;
+    WaitForTake(window);
     bool y_up = name == "Facial-Sing";  // NaturalPoint Motive exports are Y-up
     window.marker_view()->SetYUp(y_up);
     window.marker_view()->ResetView();
@@ -163,6 +185,7 @@ QStringList RunTour(const TourOptions& options) {
   }
   window.OpenCorpus(damaged);
   window.browser()->SelectTake(QString::fromStdString(demo.name));
+  WaitForTake(window);
   written << Shot(&window, options.out_dir, QStringLiteral("%1-damaged-file.png").arg(shot, 2, 10, QChar('0')));
   // 8. Models > Fit Model...: a face model fitted in the background on the
   // virtual cuer's takes (the synthetic one and the imported sentences but the
@@ -226,6 +249,7 @@ QStringList RunTour(const TourOptions& options) {
       loop.quit();
     });
     window.browser()->SelectTake(cuer_takes.front());  // a take the model's markers bind
+    WaitForTake(window);
     window.resizeDocks({window.errors_dock()}, {620}, Qt::Horizontal);
     // Every take: Facial-Sing, which lacks the model's markers, is left out (and named in the log).
     if (!window.InspectErrors(models)) throw Error("tour: the error inspection did not start");
@@ -238,6 +262,7 @@ QStringList RunTour(const TourOptions& options) {
       if (errors->utterances[i].mean_mm > errors->utterances[worst].mean_mm) worst = i;
     const QString worst_take = QString::fromStdString(errors->utterances[worst].take);
     inspector->ChooseUtterance(static_cast<int>(worst));
+    WaitForTake(window);
     QTimer timeout;
     timeout.setSingleShot(true);
     QObject::connect(&timeout, &QTimer::timeout, &loop, &QEventLoop::quit);
