@@ -13,6 +13,7 @@
 
 #include "core/error.h"
 #include "workbench/jobs/dict_job.h"
+#include "workbench/jobs/figures.h"
 #include "workbench/jobs/import_job.h"
 #include "workbench/jobs/invert_job.h"
 #include "workbench/jobs/job_util.h"
@@ -322,7 +323,7 @@ h1{border-bottom:2px solid #446}h2{margin-top:2em;border-bottom:1px solid #aab}
 table{border-collapse:collapse;margin:.5em 0}th,td{border:1px solid #ccd;padding:.25em .6em;text-align:left}
 th{background:#eef}table.grid td{text-align:right}table.grid td:first-child{text-align:left}
 .figures{display:flex;flex-wrap:wrap;gap:.5em}.figures img{max-width:520px;border:1px solid #ddd}
-.files a{margin-right:1em}.meta{color:#666;font-size:90%}.sentence{margin:1em 0;padding:.5em 1em;background:#f7f7fb}
+.files a{margin-right:1em}.meta{color:#666;font-size:90%}.warnings{color:#a40}.sentence{margin:1em 0;padding:.5em 1em;background:#f7f7fb}
 )";
 
 }  // namespace
@@ -394,8 +395,8 @@ json Demo(const DemoOptions& options, Progress& progress) {
 
   const fs::path out = options.output;
   fs::create_directories(out);
-  const fs::path figures = out / "figures";
-  fs::create_directories(figures);
+  const fs::path figures_path = out / "figures";
+  fs::create_directories(figures_path);
   const std::string corpus = (out / "corpus.h5").string();
   const std::string models = (out / "models.h5").string();
   const std::string keys = (out / "keys.h5").string();
@@ -406,6 +407,15 @@ json Demo(const DemoOptions& options, Progress& progress) {
 
   json result = {{"source", source.string()}, {"output", out.string()}, {"corpus", corpus}, {"stages", json::array()}};
   json& stages = result["stages"];
+  result["warnings"] = json::array();
+  // Without the figures module (a build without Qt) the stages run without figures.
+  std::string figures_dir = figures_path.string();
+  try {
+    figures::Require();
+  } catch (const InvalidInput& e) {
+    figures_dir.clear();
+    result["warnings"].push_back(std::string("no figures: ") + e.what());
+  }
 
   // import: every sub-folder with a marker set, in name order.
   std::vector<std::string> cued;
@@ -459,7 +469,7 @@ json Demo(const DemoOptions& options, Progress& progress) {
         fo.takes = train;
         fo.config = config;
         fo.output = models;
-        fo.figures = figures.string();
+        fo.figures = figures_dir;
         r[kind] = Fit(fo, progress);
       }
       return r;
@@ -476,7 +486,7 @@ json Demo(const DemoOptions& options, Progress& progress) {
       io.models = models;
       io.takes = cued;
       io.fill = true;
-      io.figures = figures.string();
+      io.figures = figures_dir;
       io.threads = options.threads;
       return Invert(io, progress);
     });
@@ -495,7 +505,7 @@ json Demo(const DemoOptions& options, Progress& progress) {
       ks.corpus = corpus;
       ks.keys = keys;
       ks.takes = filled;
-      ks.figures = figures.string();
+      ks.figures = figures_dir;
       r["score"] = KeysScore(ks, progress);
       return r;
     });
@@ -509,7 +519,7 @@ json Demo(const DemoOptions& options, Progress& progress) {
       po.corpus = corpus;
       po.keys = keys;
       po.takes = filled;
-      po.figures = figures.string();
+      po.figures = figures_dir;
       json r = Phasing(po, progress);
       std::ofstream f(phasing_json);
       f << r.dump(1) << "\n";
@@ -574,6 +584,12 @@ std::string DemoHtml(const json& result, const std::string& report_dir) {
     << "filling, the key recogniser, phasing, the synthesis dictionaries and new sentences synthesised. Every "
     << "stage lists its numbers, its figures and its files; the full results are in <a href=\""
     << Href((base / "report.json").string(), base) << "\">report.json</a>.</p>\n";
+  if (const json* warnings = Find(result, {"warnings"}); warnings && warnings->is_array() && !warnings->empty()) {
+    h << "<ul class=\"warnings\">\n";
+    for (const json& w : *warnings)
+      if (w.is_string()) h << "<li>" << HtmlEscape(w.get<std::string>()) << "</li>\n";
+    h << "</ul>\n";
+  }
   const json* stages = Find(result, {"stages"});
   if (stages && stages->is_array()) {
     h << "<ul>\n";
