@@ -314,6 +314,12 @@ void SayNumbers(std::ostringstream& h, const json& r, const fs::path& base) {
       else if (files->contains("wav") && (*files)["wav"].is_string())
         h << "<audio controls src=\"" << Href((*files)["wav"].get<std::string>(), base) << "\"></audio>\n";
     }
+    if (const json* w = Find(s, {"warnings"}); w && w->is_array() && !w->empty()) {
+      h << "<ul class=\"warnings\">\n";
+      for (const json& x : *w)
+        if (x.is_string()) h << "<li>" << HtmlEscape(x.get<std::string>()) << "</li>\n";
+      h << "</ul>\n";
+    }
     h << "</div>\n";
   }
 }
