@@ -266,6 +266,7 @@ TEST(DemoAcceptance, TheWholePipelineAndItsPageInHeadlessChromium) {
   ASSERT_EQ(stages[6]["result"]["sentences"].size(), 1u);
   for (const char* f : {"wav", "textgrid", "c3d", "video"})
     EXPECT_TRUE(fs::is_regular_file(stages[6]["result"]["sentences"][0]["files"][f].get<std::string>())) << f;
+  EXPECT_TRUE(fs::is_regular_file(stages[6]["result"]["sentences"][0]["frame_png"].get<std::string>()));
   const fs::path page = r["report"].get<std::string>();
   ASSERT_TRUE(fs::is_regular_file(page));
   EXPECT_EQ(json::parse(ReadText(r["report_json"].get<std::string>()))["stages"].size(), 7u);

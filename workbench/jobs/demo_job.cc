@@ -21,6 +21,7 @@
 #include "workbench/jobs/model_jobs.h"
 #include "workbench/jobs/phasing_job.h"
 #include "workbench/jobs/say_job.h"
+#include "workbench/jobs/video_job.h"
 
 #ifndef CSW_SOURCE_DIR_DEFAULT
 #define CSW_SOURCE_DIR_DEFAULT ""
@@ -308,10 +309,16 @@ void SayNumbers(std::ostringstream& h, const json& r, const fs::path& base) {
         if (files->contains(label) && (*files)[label].is_string() && !(*files)[label].get<std::string>().empty())
           h << "<a href=\"" << Href((*files)[label].get<std::string>(), base) << "\">" << HtmlEscape(path) << "</a> ";
       h << "</p>\n";
-      if (files->contains("video") && (*files)["video"].is_string() && !(*files)["video"].get<std::string>().empty())
-        h << "<video controls preload=\"metadata\" width=\"480\" src=\""
-          << Href((*files)["video"].get<std::string>(), base) << "\"></video>\n";
-      else if (files->contains("wav") && (*files)["wav"].is_string())
+      if (files->contains("video") && (*files)["video"].is_string() && !(*files)["video"].get<std::string>().empty()) {
+        h << "<div class=\"figures\">";
+        if (s.contains("frame_png") && s["frame_png"].is_string())
+          h << "<img src=\"" << Href(s["frame_png"].get<std::string>(), base)
+            << "\" alt=\"a frame of the point-light video\" width=\"320\">";
+        h << "<video controls preload=\"metadata\" width=\"320\" src=\""
+          << Href((*files)["video"].get<std::string>(), base) << "\"></video></div>\n"
+          << "<p class=\"meta\">The video is MPEG-4 Part 2 (mp4v): if the browser does not play it, open the MP4 "
+             "with a video player (VLC, mpv).</p>\n";
+      } else if (files->contains("wav") && (*files)["wav"].is_string())
         h << "<audio controls src=\"" << Href((*files)["wav"].get<std::string>(), base) << "\"></audio>\n";
     }
     if (const json* w = Find(s, {"warnings"}); w && w->is_array() && !w->empty()) {
@@ -564,7 +571,26 @@ json Demo(const DemoOptions& options, Progress& progress) {
       so.check = true;
       so.keys = keys;
       so.corpus_phasing = phasing_json;
-      return Say(so, progress);
+      json r = Say(so, progress);
+      // One frame of each video as a PNG, shown next to it: browsers do not
+      // play the MPEG-4 Part 2 (mp4v) video that OpenCV writes.
+      if (options.video && r.contains("sentences"))
+        for (json& sentence : r["sentences"]) {
+          const json* video = Find(sentence, {"files", "video"});
+          const json* c3d = Find(sentence, {"files", "c3d"});
+          if (!video || !c3d || !video->is_string() || !c3d->is_string()) continue;
+          const fs::path folder = fs::path(video->get<std::string>()).parent_path();
+          VideoOptions vo;
+          vo.input = c3d->get<std::string>();
+          vo.output = (folder / "frame_video.mp4").string();
+          if (fs::is_regular_file(folder / "markerset.json")) vo.markerset = (folder / "markerset.json").string();
+          vo.png = (folder / "frame.png").string();
+          vo.png_time_s = sentence.value("duration_s", 0.0) / 2;
+          Video(vo, progress);
+          fs::remove(vo.output);
+          sentence["frame_png"] = vo.png;
+        }
+      return r;
     });
     if (stage["result"].contains("corpus") && stage["result"]["corpus"].is_string())
       stage["files"].push_back(
