@@ -241,6 +241,26 @@ TEST(Demo, AFailingStageNamesItselfAndItsFile) {
   }
 }
 
+// Cancelling while a stage runs stops the run with Cancelled (not a stage
+// error), after the stages before it, whose progress was reported by name.
+TEST(Demo, CancelStopsTheRun) {
+  testing::TempDir dir;
+  DemoOptions o;
+  o.output = (dir / "demo").string();
+  o.cued_takes = 3;
+  o.sentences = 0;
+  std::vector<std::string> stages;
+  Progress* self = nullptr;
+  Progress progress([&](const std::string& stage, double) {
+    if (stage.rfind("demo: ", 0) == 0 && (stages.empty() || stages.back() != stage)) stages.push_back(stage);
+    if (stage == "demo: fit") self->Cancel();
+  });
+  self = &progress;
+  EXPECT_THROW(Demo(o, progress), Cancelled);
+  EXPECT_EQ(stages, (std::vector<std::string>{"demo: import", "demo: fit"}));
+  EXPECT_FALSE(fs::exists(dir / "demo" / "report" / "index.html"));
+}
+
 // The pipeline on 6 cued takes of the shipped corpus and one sentence, in
 // one test (ctest runs each test in its own process): the stages, the page's
 // links, then the page in headless Chromium when it is on PATH. About 50 s;
