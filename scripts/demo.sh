@@ -1,16 +1,21 @@
 #!/usr/bin/env bash
 # The main job on the embedded demo corpus, from a fresh Debian 12 machine (as root):
-# installs missing packages, builds csw (Release), imports the demo corpus
-# (datasets/demo, made by the virtual cuer) into out/demo/corpus.h5, prints
-# `csw info` of it, fits the face and hand models on the first third of the
+# installs missing packages, builds csw (Release) and runs `csw demo -o out/demo`
+# on the demo corpus (datasets/demo, made by the virtual cuer): imports it into
+# out/demo/corpus.h5, fits the face and hand models on the first third of the
 # sentences (out/demo/models.h5), inverts them on every sentence, fills the gaps
-# as new takes, trains the key recogniser on the filled training sentences
-# (out/demo/keys.h5), scores every filled sentence, measures the phasing and
-# writes the figures to out/demo/figures; then fits Öhman's coarticulation model
-# on the viseme takes and generates a new phone string (out/demo/coartic), and
-# runs the sign-language tools on the virtual signer (out/demo/signs: simulate,
-# segment, transitions and their duration models, a new sign sequence as BVH).
-# It ends by printing the command that opens the corpus in csw-workbench.
+# as new takes, trains the key recogniser on the labelled targets of the filled
+# training sentences (out/demo/keys.h5), scores every filled sentence, measures
+# the phasing, builds the synthesis dictionaries (out/demo/dict.h5) and
+# synthesises 3 new sentences (out/demo/say: speech, cues, markers, point-light
+# video), with the figures in out/demo/figures and everything on one page,
+# out/demo/report/index.html; prints `csw info` of the corpus; then fits Öhman's
+# coarticulation model on the viseme takes and generates a new phone string
+# (out/demo/coartic), and runs the sign-language tools on the virtual signer
+# (out/demo/signs: simulate, segment, transitions and their duration models, a
+# new sign sequence as BVH).
+# It ends by printing the page to open in a browser and the command that opens
+# the corpus in csw-workbench.
 # Regenerate the demo
 # corpus with:
 #   csw simulate demo --seed 1 -o datasets/demo
@@ -31,35 +36,10 @@ if [ ! -f "$demo/sentences/markerset.json" ]; then
   "$csw" simulate demo --seed 1 -o "$demo"
 fi
 mkdir -p out/demo
-rm -f out/demo/corpus.h5
-echo "== csw import (shapes, visemes, sentences)"
-for part in shapes visemes sentences; do
-  shopt -s nullglob
-  files=("$demo/$part"/*.c3d "$demo/$part"/*.TextGrid "$demo/$part"/*.wav)
-  "$csw" import "${files[@]}" --markerset "$demo/$part/markerset.json" -o out/demo/corpus.h5
-done
+echo "== csw demo: import, fit, invert, keys, phasing, dictionaries and 3 synthesised sentences (out/demo)"
+"$csw" demo --source "$demo" -o out/demo
 echo "== csw info out/demo/corpus.h5"
 "$csw" info out/demo/corpus.h5
-sentences=$(cd "$demo/sentences" && ls sentence_*.c3d | sed 's/\.c3d$//')
-train=$(echo "$sentences" | head -n $(( $(echo "$sentences" | wc -l) / 3 )) | paste -sd, -)
-all=$(echo "$sentences" | paste -sd, -)
-rm -f out/demo/models.h5
-echo "== csw fit face / hand on the first third of the sentences: $train"
-"$csw" fit face out/demo/corpus.h5 --train "$train" --config datasets/configs/virtual-cuer.json \
-  -o out/demo/models.h5 --figures out/demo/figures
-"$csw" fit hand out/demo/corpus.h5 --train "$train" --config datasets/configs/virtual-cuer.json \
-  -o out/demo/models.h5 --figures out/demo/figures
-echo "== csw invert on every sentence, filling the gaps into <take>.filled"
-"$csw" invert out/demo/corpus.h5 --models out/demo/models.h5 --takes "$all" --fill --figures out/demo/figures
-filled=$(echo "$sentences" | sed 's/$/.filled/' | paste -sd, -)
-train_filled=$(echo "$train" | tr ',' '\n' | sed 's/$/.filled/' | paste -sd, -)
-rm -f out/demo/keys.h5
-echo "== csw keys train on the labelled targets of the filled training sentences"
-"$csw" keys train out/demo/corpus.h5 --takes "$train_filled" -o out/demo/keys.h5
-echo "== csw keys score on every filled sentence (gestural score, free and aligned decoding as tiers)"
-"$csw" keys score out/demo/corpus.h5 --keys out/demo/keys.h5 --takes "$filled"
-echo "== csw phasing (times relative to A1; histograms and gestural scores in out/demo/figures)"
-"$csw" phasing out/demo/corpus.h5 --keys out/demo/keys.h5 --takes "$filled" --figures out/demo/figures
 echo "== csw coartic fit on the viseme takes, then csw coartic generate a new phone string (out/demo/coartic)"
 mkdir -p out/demo/coartic
 "$csw" coartic fit out/demo/corpus.h5 --models out/demo/models.h5 --takes 'visemes*' \
@@ -80,3 +60,5 @@ if [ -x build/release/workbench/gui/csw-workbench ]; then
   echo "== open the demo corpus in the desktop app:"
   echo "   build/release/workbench/gui/csw-workbench out/demo/corpus.h5"
 fi
+echo "== the report of the whole pipeline, to open in a browser:"
+echo "   $(pwd)/out/demo/report/index.html"

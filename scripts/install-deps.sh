@@ -13,6 +13,7 @@ pkgs=(
   libqcustomplot-dev libqcustomplot2.1-qt6 libgl-dev
   clang libclang-rt-14-dev clang-format
   praat xvfb
+  chromium
 )
 missing=()
 for p in "${pkgs[@]}"; do

@@ -8,6 +8,7 @@
 #include "workbench/jobs/clean_job.h"
 #include "workbench/jobs/coartic_generate_job.h"
 #include "workbench/jobs/cue_job.h"
+#include "workbench/jobs/demo_job.h"
 #include "workbench/jobs/dict_job.h"
 #include "workbench/jobs/jobs.h"
 #include "workbench/jobs/keys_job.h"
@@ -782,6 +783,47 @@ class SayCommand : public Command {
   bool json_ = false;
 };
 
+class DemoCommand : public Command {
+ public:
+  void Register(CLI::App& app) override {
+    sub_ = app.add_subcommand("demo",
+                              "The whole cued-speech pipeline on the demo corpus (import, fit, invert, keys, phasing, "
+                              "dictionaries, synthesis) and one HTML page of it: DIR/report/index.html");
+    sub_->add_option("-o,--output", options_.output, "Output folder (created)")->required();
+    sub_->add_option("--source", options_.source,
+                     "Demo corpus folder (sub-folders with a markerset.json); default the shipped datasets/demo");
+    sub_->add_option("--cued", options_.cued, "The source's sub-folder of cued takes (with a key tier)")
+        ->capture_default_str();
+    sub_->add_option("--takes", options_.cued_takes, "Use the first N cued takes (0 = all)")->capture_default_str();
+    sub_->add_option("--config", options_.config,
+                     "Model configuration for csw fit; default datasets/configs/virtual-cuer.json");
+    sub_->add_option("--sentences-file", options_.sentences_file,
+                     "Sentences to synthesise, one per line; default datasets/unseen_sentences_fr.txt");
+    sub_->add_option("--sentences", options_.sentences, "Synthesise the first N of them (0 = no synthesis)")
+        ->capture_default_str();
+    sub_->add_flag("--no-video", no_video_, "Do not write the point-light videos");
+    sub_->add_option("--threads", options_.threads, "Takes inverted in parallel (0 = hardware threads)")
+        ->capture_default_str();
+    sub_->add_flag("--json", json_, "Print the report as JSON");
+  }
+  int Run(Progress& progress) override {
+    options_.video = !no_video_;
+    if (std::string why = options_.Check(); !why.empty()) throw UsageError(why);
+    const nlohmann::json r = jobs::Demo(options_, progress);
+    if (json_) {
+      PrintJson(r);
+    } else {
+      std::cout << jobs::DemoText(r);
+    }
+    return 0;
+  }
+
+ private:
+  jobs::DemoOptions options_;
+  bool no_video_ = false;
+  bool json_ = false;
+};
+
 class CoarticCommand : public Command {
  public:
   void Register(CLI::App& app) override {
@@ -1019,6 +1061,7 @@ std::vector<std::unique_ptr<Command>> MakeCommands() {
   c.push_back(std::make_unique<CoarticCommand>());
   c.push_back(std::make_unique<DictCommand>());
   c.push_back(std::make_unique<SayCommand>());
+  c.push_back(std::make_unique<DemoCommand>());
   c.push_back(std::make_unique<TransitionsCommand>());
   c.push_back(std::make_unique<SignSequenceCommand>());
   c.push_back(std::make_unique<PackCommand>());
