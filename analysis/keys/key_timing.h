@@ -50,7 +50,7 @@ struct KeyTimingOptions {
   phasing::MovementFitOptions shape_fit = ShapeFitDefaults();
   phasing::MovementFitOptions placement_fit;
   double arrival_tolerance = 0.05;  // rough target: fraction of the segment's distance range
-  double window_margin_s = 0.15;    // component segments: how far outside their keys' joint segments
+  double window_margin_s = 0.1;     // component segments: how far outside their keys' joint segments
   bool kinematic = true;            // false: rough targets only
   int max_refits = 3;               // refits around a fitted target that hit its tolerance
   int refinement_passes = 0;        // refits with the neighbours' fitted targets
