@@ -55,6 +55,41 @@ int64_t Arrival(int64_t start, int64_t end, double tolerance, const std::functio
   return start;
 }
 
+// Keys where neither component changes (a repeated code): the hand holds, so
+// neither the posteriors (equal over the whole stretch) nor the kinematics
+// (a movement no larger than the cuer's variability) say when the key's
+// target is. Its target is interpolated by key index between the targets of
+// the nearest keys with a change (keys follow the syllables at a roughly
+// steady rate); after the last change, the take's mean interval between
+// changed keys is added, within the take.
+void InterpolateRepeats(std::vector<TimedKey>& keys, double end_s) {
+  std::vector<size_t> anchors;
+  for (size_t k = 0; k < keys.size(); ++k)
+    if (keys[k].shape.changes || keys[k].placement.changes) anchors.push_back(k);
+  if (anchors.empty()) return;
+  double step = 0.0;
+  if (anchors.size() >= 2)
+    step = (keys[anchors.back()].target_s - keys[anchors.front()].target_s) /
+           static_cast<double>(anchors.back() - anchors.front());
+  size_t a = 0;
+  for (size_t k = 0; k < keys.size(); ++k) {
+    if (keys[k].shape.changes || keys[k].placement.changes) continue;
+    while (a + 1 < anchors.size() && anchors[a + 1] < k) ++a;
+    if (anchors[a] > k) continue;  // no change before it (the first key always changes)
+    const size_t p = anchors[a];
+    const double tp = keys[p].target_s;
+    double t;
+    if (a + 1 < anchors.size()) {
+      const size_t q = anchors[a + 1];
+      t = tp + (keys[q].target_s - tp) * static_cast<double>(k - p) / static_cast<double>(q - p);
+    } else {
+      if (!(step > 0.0)) continue;
+      t = std::min(end_s, tp + step * static_cast<double>(k - p));
+    }
+    keys[k].target_s = t;
+  }
+}
+
 }  // namespace
 
 phasing::MovementFitOptions KeyTimingOptions::ShapeFitDefaults() {
@@ -137,10 +172,10 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
           for (int refit = 0; refit < options.max_refits + 1; ++refit) {
             if (!(previous < guess && guess < next)) break;
             m = phasing::EstimateMovement(traj, previous, guess, next, fit);
-            if (!m.moved || std::abs(m.target_s - guess) < 0.9 * fit.target_tolerance_s) break;
+            if (!m.Usable() || std::abs(m.target_s - guess) < 0.9 * fit.target_tolerance_s) break;
             guess = m.target_s;
           }
-          if (!m.moved) {
+          if (!m.Usable()) {
             if (pass == 0) continue;
             timing[i].kinematic = false;
             continue;
@@ -226,10 +261,12 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
     }
   }
   auto frame = [&](double s) { return std::clamp<int64_t>(std::llround(s * rate_hz), 0, n - 1); };
-  for (TimedKey& t : out) {
+  for (TimedKey& t : out)
     t.target_s = t.shape.changes       ? t.shape.target_s
                  : t.placement.changes ? t.placement.target_s
                                        : static_cast<double>(t.key.target_frame) / rate_hz;
+  if (options.interpolate_repeats) InterpolateRepeats(out, end_s);
+  for (TimedKey& t : out) {
     t.key.shape_target_frame = frame(t.shape.target_s);
     t.key.placement_target_frame = frame(t.placement.target_s);
     t.key.target_frame = frame(t.target_s);

@@ -26,9 +26,14 @@
 // into it: its target is the instant the hand leaves it, the earliest fitted
 // onset of its components' next movements (the rough time when none is
 // fitted). A key's target (target_frame, target_s) is its shape target when the
-// shape changes, else its placement target, else the joint arrival of
-// DecodeAligned — the convention of the `keys` label tier (targets at the shape
-// targets, placement targets in a tier of their own).
+// shape changes, else its placement target — the convention of the `keys`
+// label tier (targets at the shape targets, placement targets in a tier of
+// their own). A key where neither changes (a repeated code) shows no movement
+// and no posterior change: its target is interpolated by key index between the
+// targets of the nearest keys with a change (interpolate_repeats; after the
+// last change, the take's mean interval between changed keys is added; off:
+// the joint arrival of DecodeAligned, which sits at one end of the repeats'
+// shared stretch, 300 ms off on average on the virtual cuer).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -45,10 +50,11 @@ struct KeyTimingOptions {
   phasing::MovementFitOptions shape_fit = ShapeFitDefaults();
   phasing::MovementFitOptions placement_fit;
   double arrival_tolerance = 0.05;  // rough target: fraction of the segment's distance range
-  double window_margin_s = 0.15;    // component segments: how far outside their keys' joint segments
+  double window_margin_s = 0.1;     // component segments: how far outside their keys' joint segments
   bool kinematic = true;            // false: rough targets only
-  int max_refits = 2;               // refits around a fitted target that hit its tolerance
+  int max_refits = 3;               // refits around a fitted target that hit its tolerance
   int refinement_passes = 0;        // refits with the neighbours' fitted targets
+  bool interpolate_repeats = true;  // repeated keys: target interpolated between their neighbours'
   std::string Check() const;        // "" when valid, else the reason
   static phasing::MovementFitOptions ShapeFitDefaults();
 };

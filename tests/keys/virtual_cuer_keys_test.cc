@@ -187,6 +187,14 @@ double Mean(const std::vector<double>& v) {
   return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
 }
 
+double Sd(const std::vector<double>& v) {
+  if (v.size() < 2) return 0.0;
+  const double m = Mean(v);
+  double s = 0.0;
+  for (double x : v) s += (x - m) * (x - m);
+  return std::sqrt(s / static_cast<double>(v.size() - 1));
+}
+
 // Trains on takes [0, train) and scores the others, with feature set `variant`
 // (0 = filled take, 1 = markers without artefacts).
 Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const HandLayout& layout,
@@ -282,7 +290,8 @@ Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const H
                   << std::llround(truth[k].timing.placement_target_s * rate) << " seg "
                   << timed[k].placement.segment_start << "-" << timed[k].placement.segment_end << " rough "
                   << timed[k].placement.rough_frame << " fit " << timed[k].placement.onset_s * rate << "-"
-                  << timed[k].placement.target_s * rate << (place_changes ? "" : " (held)") << "\n";
+                  << timed[k].placement.target_s * rate << (place_changes ? "" : " (held)") << " key "
+                  << timed[k].target_s * rate << "\n";
       if (err <= 40.0) ++tally.aligned_correct;
     }
   }
@@ -303,9 +312,14 @@ Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const H
             << tally.free_deletions << "); reached keys " << tally.free_reached_matches << " / " << tally.free_reached
             << "\n"
             << "aligned " << tally.aligned_correct << " / " << tally.aligned_keys << " = " << tally.aligned_rate
-            << ", key target error mean " << Mean(tally.aligned_error_ms) << " ms; shape target "
-            << Mean(tally.aligned_shape_error_ms) << " ms, placement target " << Mean(tally.aligned_placement_error_ms)
-            << " ms; reached keys " << Mean(tally.aligned_error_reached_ms) << " ms ("
+            << ", key target error mean " << Mean(tally.aligned_error_ms) << " ms (sd " << Sd(tally.aligned_error_ms)
+            << ", max "
+            << (tally.aligned_error_ms.empty()
+                    ? 0.0
+                    : *std::max_element(tally.aligned_error_ms.begin(), tally.aligned_error_ms.end()))
+            << "); shape target " << Mean(tally.aligned_shape_error_ms) << " ms, placement target "
+            << Mean(tally.aligned_placement_error_ms) << " ms; reached keys " << Mean(tally.aligned_error_reached_ms)
+            << " ms ("
             << std::count_if(tally.aligned_error_reached_ms.begin(), tally.aligned_error_reached_ms.end(),
                              [](double e) { return e <= 40.0; })
             << " / " << tally.aligned_error_reached_ms.size() << " within 40 ms), approached "
@@ -399,21 +413,27 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
   // >= 0.98 within 40 ms, mean target error <= 25 ms. NOT MET (docs/analysis.md).
   // Measured on the filled takes (seed 1, 30 sentences, 236 held-out keys):
   // shape 0.754, placement 0.839, free 190/236 = 0.805 (148 insertions),
-  // aligned (kinematic target times, analysis/keys/key_timing.h) 157/236 =
-  // 0.665 within 40 ms, mean target error 56 ms. Clean markers: shape 0.903
-  // (reached keys 1.000, approached 0.566), placement 0.903 (reached 0.985,
-  // approached 0.792), free 0.873, aligned 0.767, 43.3 ms.
+  // aligned (kinematic target times, analysis/keys/key_timing.h) 161/236 =
+  // 0.682 within 40 ms, mean target error 47.8 ms (sd 68.7, max 368). Clean
+  // markers: shape 0.903 (reached keys 1.000, approached 0.566), placement
+  // 0.903 (reached 0.985, approached 0.792), free 0.873, aligned 0.792,
+  // 35.1 ms (sd 61.0, max 512).
   // Model-filled takes (palm-frame Gaussian fill trained on the training
   // takes): shape 0.915 (reached 1.000, approached 0.623), placement 0.907
-  // (reached 0.985, approached 0.802), free 204/236 = 0.864, aligned 0.712,
-  // 46.0 ms. (Before the kinematic target times: aligned 0.10-0.14, 93-104 ms.)
+  // (reached 0.985, approached 0.802), free 204/236 = 0.864, aligned 0.763,
+  // 35.8 ms (sd 53.7, max 326; reached keys 24.9 ms). (2026-12-03, with
+  // repeated keys interpolated, three refits and a 100 ms segment margin;
+  // before: aligned 0.712,
+  // 46.0 ms, sd 79.6, max 533; clean 0.767, 43.4 ms; filled 0.665, 55.7 ms.
+  // Before the kinematic target times: aligned 0.10-0.14, 93-104 ms.)
   // The floors below guard those numbers against regressions.
-  EXPECT_GE(model.aligned_rate, 0.68);
+  EXPECT_GE(model.aligned_rate, 0.75);
   EXPECT_GE(static_cast<double>(model.free_reached_matches) / model.free_reached, 0.93);  // 122/128 = 0.953
-  EXPECT_LE(Mean(model.aligned_error_ms), 55.0);
-  EXPECT_GE(clean.aligned_rate, 0.74);
-  EXPECT_LE(Mean(clean.aligned_error_ms), 47.0);
-  EXPECT_GE(filled.aligned_rate, 0.58);
+  EXPECT_LE(Mean(model.aligned_error_ms), 39.0);
+  EXPECT_LE(Mean(model.aligned_error_reached_ms), 28.0);
+  EXPECT_GE(clean.aligned_rate, 0.78);
+  EXPECT_LE(Mean(clean.aligned_error_ms), 38.0);
+  EXPECT_GE(filled.aligned_rate, 0.67);
   EXPECT_GE(model.shape_reached.Accuracy(), 0.99);
   EXPECT_GE(model.placement_reached.Accuracy(), 0.97);
   EXPECT_GE(model.shape.Accuracy(), 0.89);
@@ -427,7 +447,7 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
   EXPECT_GE(filled.shape.Accuracy(), 0.72);
   EXPECT_GE(filled.placement.Accuracy(), 0.80);
   EXPECT_GE(filled.free_rate, 0.78);
-  EXPECT_LE(Mean(filled.aligned_error_ms), 65.0);
+  EXPECT_LE(Mean(filled.aligned_error_ms), 51.0);
 }
 
 // Another lab: the virtual cuer's second layout (other marker names and
@@ -485,15 +505,16 @@ TEST(VirtualCuerKeys, OtherLabLayoutAndShiftedTiming) {
   }
   // Measured (seed 1, 15 sentences, 10 scored, 134 keys; docs/analysis.md):
   // clean markers shape 0.888 (reached 103/103), placement 0.828 (reached
-  // 62/62), free 113/134 (reached keys 59/61), aligned 97/134 = 0.724 within
-  // 40 ms, mean 43.8 ms (reached keys 24.3 ms); spline/DCT-filled raw takes
-  // shape 0.657, placement 0.769 (2-marker phalanges: a hidden tip hides a
-  // whole finger's distance).
+  // 62/62), free 113/134 (reached keys 59/61), aligned 101/134 = 0.754
+  // within 40 ms, mean 36.1 ms (sd 63.1; reached keys 19.2 ms; before the
+  // repeated keys were interpolated: 97/134, 43.4-43.8 ms); spline/DCT-filled
+  // raw takes shape 0.657, placement 0.769 (2-marker phalanges: a hidden tip
+  // hides a whole finger's distance), aligned 97/134, 41.4 ms (was 46.2).
   EXPECT_GE(clean.shape_reached.Accuracy(), 0.97);
   EXPECT_GE(clean.placement_reached.Accuracy(), 0.95);
   EXPECT_GE(static_cast<double>(clean.free_reached_matches) / clean.free_reached, 0.90);
-  EXPECT_GE(clean.aligned_rate, 0.65);
-  EXPECT_LE(Mean(clean.aligned_error_ms), 55.0);
+  EXPECT_GE(clean.aligned_rate, 0.73);
+  EXPECT_LE(Mean(clean.aligned_error_ms), 40.0);
   EXPECT_GE(filled.shape.Accuracy(), 0.62);
   EXPECT_GE(filled.placement.Accuracy(), 0.72);
 }
