@@ -414,10 +414,21 @@ PointLightResult WritePointLightVideo(const Take& take, const MarkerSet* set, co
   TempFile video{(folder / (stem + ".mp4")).string()};
   try {
     cv::VideoWriter writer;
-    if (!writer.open(video.path, cv::CAP_FFMPEG, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), options.fps,
-                     cv::Size(options.width, options.height))) {
+    // H.264 (fourcc avc1: Debian's libavcodec with libx264), which browsers
+    // play; MPEG-4 Part 2 (mp4v) when that encoder is missing. (Sizes are
+    // even: H.264's 4:2:0 chroma needs it, PointLightOptions::Check.)
+    const cv::Size size(options.width, options.height);
+    bool opened =
+        writer.open(video.path, cv::CAP_FFMPEG, cv::VideoWriter::fourcc('a', 'v', 'c', '1'), options.fps, size);
+    if (opened) {
+      r.codec = "h264";
+    } else {
+      opened = writer.open(video.path, cv::CAP_FFMPEG, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), options.fps, size);
+      r.codec = "mpeg4";
+    }
+    if (!opened) {
       const bool writable = access(folder.c_str(), W_OK) == 0;
-      throw IoError(path, writable ? "cannot write the video (OpenCV could not open an mp4v MP4 writer)"
+      throw IoError(path, writable ? "cannot write the video (OpenCV could not open an H.264 or mp4v MP4 writer)"
                                    : "cannot write the video: the folder " + folder.string() + " is not writable");
     }
     for (int64_t k = 0; k < r.frames; ++k) {

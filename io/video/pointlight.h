@@ -1,5 +1,6 @@
 #pragma once
-// Point-light video of a take's markers (issue 15 §5): an MP4 (fourcc mp4v,
+// Point-light video of a take's markers (issue 15 §5): an MP4 (H.264, or
+// MPEG-4 Part 2 (mp4v) when the H.264 encoder is missing;
 // OpenCV's videoio) of the markers seen from the front, as white and coloured
 // dots on black, with the marker set's sticks, a frame counter and the time.
 // docs/video.md describes the picture and the choices below.
@@ -105,6 +106,7 @@ struct PointLightResult {
   int64_t markers = 0;
   int64_t sticks = 0;  // sticks drawn (both ends in the take)
   bool audio = false;  // muxed with the given WAV
+  std::string codec;   // "h264" (fourcc avc1) or "mpeg4" (fourcc mp4v, no H.264 encoder)
   std::vector<std::string> warnings;
 };
 

@@ -164,21 +164,14 @@ json Video(const VideoOptions& options, Progress& progress) {
   const video::VideoApi& api = Api();
   PointLightResult r;
   Rethrow(api.write_video(take, set ? &*set : nullptr, options.output, o, options.audio, &progress, &r));
-  json out = {{"input", options.input},
-              {"take", take.name},
-              {"output", r.path},
-              {"frames", r.frames},
-              {"fps", r.fps},
-              {"duration_s", r.duration_s},
-              {"width", r.width},
-              {"height", r.height},
-              {"markers", r.markers},
-              {"sticks", r.sticks},
-              {"markerset", set_from},
-              {"view", r.view.how},
-              {"audio", {{"wav", options.audio}, {"muxed", r.audio}}},
-              {"png", nullptr},
-              {"warnings", r.warnings}};
+  json out = {{"input", options.input}, {"take", take.name},
+              {"output", r.path},       {"frames", r.frames},
+              {"fps", r.fps},           {"duration_s", r.duration_s},
+              {"width", r.width},       {"height", r.height},
+              {"markers", r.markers},   {"sticks", r.sticks},
+              {"codec", r.codec},       {"markerset", set_from},
+              {"view", r.view.how},     {"audio", {{"wav", options.audio}, {"muxed", r.audio}}},
+              {"png", nullptr},         {"warnings", r.warnings}};
   if (!options.png.empty()) {
     const int64_t frame =
         std::min<int64_t>(std::llround(options.png_time_s * options.fps), std::max<int64_t>(0, r.frames - 1));

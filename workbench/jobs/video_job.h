@@ -37,7 +37,7 @@ struct VideoOptions {
 bool ParseVideoSize(const std::string& text, int* width, int* height);
 
 // {"input", "take", "output", "frames", "fps", "duration_s", "width", "height",
-//  "markers", "sticks", "markerset", "view", "audio": {"wav", "muxed"}, "png",
+//  "markers", "sticks", "codec" ("h264" or "mpeg4"), "markerset", "view", "audio": {"wav", "muxed"}, "png",
 //  "warnings": [...]}.
 nlohmann::json Video(const VideoOptions& options, Progress& progress);
 // The default text output.

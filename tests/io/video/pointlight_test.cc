@@ -280,6 +280,7 @@ TEST(PointLight, VideoReadsBackWithTheRightFramesSizeAndDots) {
   EXPECT_EQ(r.width, 320);
   EXPECT_EQ(r.height, 240);
   EXPECT_EQ(r.markers, 5);
+  EXPECT_EQ(r.codec, "h264");  // H.264 (Debian's libavcodec has libx264), which browsers play
   EXPECT_FALSE(r.audio);
   EXPECT_TRUE(r.warnings.empty());
   ASSERT_FALSE(fractions.empty());
