@@ -315,9 +315,7 @@ void SayNumbers(std::ostringstream& h, const json& r, const fs::path& base) {
           h << "<img src=\"" << Href(s["frame_png"].get<std::string>(), base)
             << "\" alt=\"a frame of the point-light video\" width=\"320\">";
         h << "<video controls preload=\"metadata\" width=\"320\" src=\""
-          << Href((*files)["video"].get<std::string>(), base) << "\"></video></div>\n"
-          << "<p class=\"meta\">The video is MPEG-4 Part 2 (mp4v): if the browser does not play it, open the MP4 "
-             "with a video player (VLC, mpv).</p>\n";
+          << Href((*files)["video"].get<std::string>(), base) << "\"></video></div>\n";
       } else if (files->contains("wav") && (*files)["wav"].is_string())
         h << "<audio controls src=\"" << Href((*files)["wav"].get<std::string>(), base) << "\"></audio>\n";
     }
@@ -572,8 +570,9 @@ json Demo(const DemoOptions& options, Progress& progress) {
       so.keys = keys;
       so.corpus_phasing = phasing_json;
       json r = Say(so, progress);
-      // One frame of each video as a PNG, shown next to it: browsers do not
-      // play the MPEG-4 Part 2 (mp4v) video that OpenCV writes.
+      // One frame of each video as a PNG, shown next to it (a still for the
+      // page, and for machines whose OpenCV has no H.264 encoder: browsers do
+      // not play its MPEG-4 Part 2 fallback).
       if (options.video && r.contains("sentences"))
         for (json& sentence : r["sentences"]) {
           const json* video = Find(sentence, {"files", "video"});
