@@ -15,11 +15,16 @@
 #include <string>
 #include <vector>
 
+#include "bench/lab_corpus.h"
 #include "io/corpus/corpus.h"
 
 namespace {
 
 namespace fs = std::filesystem;
+using csw::bench::CachedLabCorpus;
+using csw::bench::FolderBytes;
+using csw::bench::LabHeader;
+using csw::bench::RandomWalk;
 
 constexpr int64_t kFrames = 60000;
 constexpr int64_t kMarkers = 113;
@@ -70,13 +75,6 @@ fs::path BenchDir() {
   fs::path dir = fs::temp_directory_path() / ("csw_corpus_bench_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   return dir;
-}
-
-// Bytes of a corpus: the index and its folder of take files (format version 2).
-uint64_t FolderBytes(const std::string& corpus) {
-  uint64_t total = fs::file_size(corpus);
-  for (const auto& e : fs::directory_iterator(csw::CorpusTransaction::FolderPath(corpus))) total += e.file_size();
-  return total;
 }
 
 void BM_StreamTakeIntoCorpus(benchmark::State& state) {
@@ -137,99 +135,16 @@ void BM_LoadMarkersWindow(benchmark::State& state) {
 BENCHMARK(BM_LoadMarkersWindow)->Unit(benchmark::kMicrosecond)->UseRealTime();
 
 // ---------------------------------------------------------------------------
-// Format version 2: commits cost what changed.
-
-constexpr int64_t kLabMarkers = 60;
-constexpr double kLabRate = 120.0;
-
-// Random-walk trajectories (0.01 mm quantized steps of about 0.3 mm per frame,
-// like slow facial markers) with 1 % missing samples: compresses about as real
-// captures do, unlike smooth synthetic curves.
-std::vector<float> RandomWalk(int64_t frames, uint32_t seed) {
-  std::vector<float> d(static_cast<size_t>(frames * kLabMarkers * 3));
-  std::vector<double> pos(static_cast<size_t>(kLabMarkers * 3));
-  uint32_t state = seed;
-  auto next = [&state] {
-    state = state * 1664525u + 1013904223u;
-    return static_cast<double>(state >> 8) / 16777216.0;
-  };
-  for (size_t i = 0; i < pos.size(); ++i) pos[i] = 1000.0 * next();
-  for (int64_t f = 0; f < frames; ++f) {
-    for (int64_t m = 0; m < kLabMarkers; ++m) {
-      float* p = &d[static_cast<size_t>((f * kLabMarkers + m) * 3)];
-      const bool missing = next() < 0.01;
-      for (int k = 0; k < 3; ++k) {
-        double& x = pos[static_cast<size_t>(m * 3 + k)];
-        x += (next() - 0.5) * 0.6;
-        p[k] = missing ? std::nanf("") : static_cast<float>(std::round(x * 100.0) / 100.0);
-      }
-    }
-  }
-  return d;
-}
-
-csw::Take LabHeader(const std::string& name) {
-  csw::Take t;
-  t.name = name;
-  t.rate_hz = kLabRate;
-  for (int64_t m = 0; m < kLabMarkers; ++m) t.marker_names.push_back("M" + std::to_string(m));
-  return t;
-}
-
-// Frames of a big take: 100,000 frames × 60 markers (14 min at 120 Hz), a ~39 MB data file.
-constexpr int64_t kBigTakeFrames = 100000;
-// The take each BM_OneTakeCommit iteration replaces: one minute.
-constexpr int64_t kCommitFrames = 7200;
-
-const std::vector<float>& BigTakeData() {
-  static const std::vector<float> d = RandomWalk(kBigTakeFrames, 7);
-  return d;
-}
-
-void WriteBigTake(csw::CorpusTransaction& tx, const std::string& name) {
-  csw::CorpusTransaction::TakeWriter w = tx.BeginTake(LabHeader(name));
-  w.AppendFrames(BigTakeData().data(), kBigTakeFrames);
-  w.Finish();
-}
-
-// A corpus of `takes` big takes (~39 MB each: 1 take ≈ 39 MB, 100 takes ≈ 3.9 GB) plus the
-// one-minute take the benchmark replaces, built once and kept in /tmp
-// (csw_bench_corpus_<takes>/corpus.h5) for later runs.
-std::string CachedCorpus(int takes) {
-  const fs::path dir = fs::temp_directory_path() / ("csw_bench_corpus_" + std::to_string(takes));
-  const std::string path = (dir / "corpus.h5").string();
-  std::error_code ec;
-  if (fs::exists(path, ec)) {
-    try {
-      if (csw::Corpus::Open(path).Takes().size() == static_cast<size_t>(takes) + 1) return path;
-    } catch (const std::exception&) {
-    }
-  }
-  fs::remove_all(dir, ec);
-  fs::create_directories(dir);
-  csw::CorpusTransaction tx(path);
-  for (int i = 0; i < takes; ++i) {
-    char name[32];
-    std::snprintf(name, sizeof name, "take%03d", i);
-    WriteBigTake(tx, name);
-  }
-  csw::Take header = LabHeader("zz_edited");
-  csw::CorpusTransaction::TakeWriter w = tx.BeginTake(header);
-  static const std::vector<float> small = RandomWalk(kCommitFrames, 11);
-  w.AppendFrames(small.data(), kCommitFrames);
-  w.Finish();
-  tx.Commit();
-  return path;
-}
-
+// Format version 2: commits cost what changed (lab corpora: bench/lab_corpus.h).
 // One transaction that replaces one one-minute take, then commits.
 void BM_OneTakeCommit(benchmark::State& state) {
-  const std::string path = CachedCorpus(static_cast<int>(state.range(0)));
-  static const std::vector<float> data = RandomWalk(kCommitFrames, 11);
+  const std::string path = CachedLabCorpus(static_cast<int>(state.range(0)));
+  const std::vector<float>& data = csw::bench::SmallTakeData();
   for (auto _ : state) {
     csw::CorpusTransaction tx(path);
-    csw::CorpusTransaction::TakeWriter w = tx.BeginTake(LabHeader("zz_edited"), csw::IfTakeExists::kReplace);
-    w.AppendFrames(data.data(), kCommitFrames);
+    csw::CorpusTransaction::TakeWriter w =
+        tx.BeginTake(LabHeader(csw::bench::kSmallTakeName), csw::IfTakeExists::kReplace);
+    w.AppendFrames(data.data(), csw::bench::kSmallTakeFrames);
     w.Finish();
     tx.Commit();
   }

@@ -626,7 +626,14 @@ TEST_F(ViewerTest, DamagedOrForeignFilesAreLoggedAndTheAppStaysUsable) {
   ASSERT_TRUE(OpenAndWait(w.get(), corpus_));
   fs::path foreign = dir_ / "notes.h5";
   std::ofstream(foreign) << "this is a text file, not HDF5\n";
-  EXPECT_FALSE(w->OpenCorpus(QString::fromStdString(foreign.string())));
+  // The open runs off the GUI thread; its failure arrives as a signal.
+  QSignalSpy open_failed(w.get(), &MainWindow::CorpusOpenFailed);
+  ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(foreign.string())));
+  EXPECT_TRUE(w->corpus_opening());
+  ASSERT_TRUE(open_failed.wait(20000));
+  EXPECT_TRUE(open_failed.at(0).at(1).toString().contains("notes.h5"))
+      << open_failed.at(0).at(1).toString().toStdString();
+  EXPECT_FALSE(w->corpus_opening());
   EXPECT_EQ(w->log()->CountLevel(LogPanel::Level::kError), 1);
   EXPECT_TRUE(w->log()->entries().back().contains("notes.h5"));
   // Still on the previous corpus, still working.

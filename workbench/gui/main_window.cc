@@ -33,6 +33,7 @@
 #include "workbench/gui/figure_export.h"
 #include "workbench/gui/fit_dialog.h"
 #include "workbench/gui/import_runner.h"
+#include "workbench/gui/job_dialog.h"
 #include "workbench/gui/job_runner.h"
 #include "workbench/gui/label_counts.h"
 #include "workbench/gui/label_lane.h"
@@ -183,6 +184,20 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
     UpdateTakeBusy();
   });
 
+  corpus_opener_ = new JobRunner(QStringLiteral("csw-corpus-open"), this);
+  connect(corpus_opener_, &JobRunner::Succeeded, this, [this] { OnCorpusOpenEnded(true, QString()); });
+  connect(corpus_opener_, &JobRunner::Failed, this,
+          [this](const QString& message) { OnCorpusOpenEnded(false, message); });
+  connect(corpus_opener_, &JobRunner::Canceled, this, [this] { OnCorpusOpenEnded(false, tr("cancelled")); });
+  // After an import the corpus reopens; ImportFinished says both are over.
+  auto import_reopened = [this] {
+    if (!import_reopen_pending_ || corpus_opener_->running()) return;
+    import_reopen_pending_ = false;
+    emit ImportFinished();
+  };
+  connect(this, &MainWindow::CorpusOpened, this, import_reopened);
+  connect(this, &MainWindow::CorpusOpenFailed, this, import_reopened);
+
   connect(browser_, &CorpusBrowser::TakeSelected, this, [this](const QString& name) { SelectTake(name); });
   connect(playback_, &Playback::FrameChanged, this, &MainWindow::OnFrameChanged);
   connect(playback_, &Playback::Note, log_, &LogPanel::Info);
@@ -219,8 +234,12 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
             QString corpus = QString::fromStdString(import_runner_->options().corpus);
             log_->Info(tr("Imported %n take(s) into %1: %2", nullptr, static_cast<int>(takes.size()))
                            .arg(corpus, takes.join(", ")));
-            if (OpenCorpus(corpus) && !takes.isEmpty()) browser_->SelectTake(takes.front());
-            emit ImportFinished();
+            // The corpus reopens off the GUI thread; ImportFinished follows its end.
+            if (OpenCorpus(corpus, takes.isEmpty() ? QString() : takes.front())) {
+              import_reopen_pending_ = true;
+            } else {
+              emit ImportFinished();
+            }
           });
   connect(import_runner_, &ImportRunner::Canceled, this, [this, finish] {
     finish();
@@ -271,6 +290,12 @@ void MainWindow::BuildMenus() {
   models->addAction(tr("&Fit Model…"), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_F), this,
                     [this] { ShowFitDialog(); });
   models->addAction(tr("&Inspect Reconstruction Errors…"), this, &MainWindow::ChooseAndInspectErrors);
+
+  QMenu* analysis = menuBar()->addMenu(tr("&Analysis"));
+  for (const JobSpec& spec : AnalysisJobs()) {
+    const QString id = spec.id;
+    analysis->addAction(spec.title + QStringLiteral("…"), this, [this, id] { ShowJobDialog(id); });
+  }
 
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(takes_dock_->toggleViewAction());
@@ -351,8 +376,10 @@ void MainWindow::closeEvent(QCloseEvent* event) {
     std::fprintf(stderr, "csw-workbench: %s\n", qPrintable(m));
   }
   import_runner_->Cancel();
+  corpus_opener_->Cancel();
   take_loader_->Cancel();
   if (fit_dialog_ != nullptr) fit_dialog_->CancelFit();
+  for (auto& [id, dialog] : job_dialogs_) dialog->Cancel();
   error_inspector_->Cancel();
   SaveLayout();
   event->accept();
@@ -389,37 +416,90 @@ void MainWindow::UpdateTitle() {
   setWindowTitle(title);
 }
 
-bool MainWindow::OpenCorpus(const QString& path) {
-  try {
-    Corpus corpus = Corpus::Open(path.toStdString());
-    std::vector<TakeSummary> takes = corpus.Takes();
-    corpus_ = corpus;
-    take_.reset();
-    // A take still loading from the corpus shown before ends unseen.
-    if (!wanted_take_.isEmpty()) {
-      wanted_take_.clear();
-      ++wanted_id_;
-      take_loader_->Cancel();
-      UpdateTakeBusy();
-    }
-    seek_frame_ = -1;
-    labels_->ForgetSaved();
-    labels_->SetTake(std::string(), nullptr, label_tier_combo_->currentText().toStdString());
-    marker_view_->SetTake(nullptr);
-    plots_->SetTake(nullptr);
-    playback_->SetTake(0, 0, nullptr);
-    marker_combo_->clear();
-    browser_->SetTakes(takes);
-    AddRecent(path);
-    log_->Info(tr("Opened %1 (%n take(s))", nullptr, static_cast<int>(takes.size())).arg(path));
-    UpdateTitle();
-    if (!takes.empty()) browser_->SelectTake(QString::fromStdString(takes.front().name));
+// What the corpus opener's worker hands to the GUI thread.
+struct MainWindow::OpenedCorpus {
+  std::optional<Corpus> corpus;
+  std::vector<TakeSummary> takes;
+};
+
+bool MainWindow::OpenCorpus(const QString& path, const QString& select) {
+  if (path.isEmpty()) return false;
+  if (corpus_opener_->running()) {
+    // The open running now ends unseen; this one starts when it has.
+    next_open_ = path;
+    next_open_select_ = select;
+    UpdateTakeBusy();
     return true;
-  } catch (const std::exception& e) {
-    log_->Error(tr("Cannot open %1: %2").arg(path, QString::fromStdString(e.what())));
-    statusBar()->showMessage(tr("Cannot open %1 — see the log").arg(QFileInfo(path).fileName()), 8000);
-    return false;
   }
+  opening_path_ = path;
+  opening_select_ = select;
+  auto out = std::make_shared<OpenedCorpus>();
+  opening_result_ = out;
+  const std::string file = path.toStdString();
+  corpus_opener_->Start([file, out](Progress& progress) {
+    progress.Update("opening corpus", 0.0);
+    Corpus corpus = Corpus::Open(file);
+    out->takes = corpus.Takes();
+    out->corpus = std::move(corpus);
+    progress.Update("opening corpus", 1.0);
+  });
+  UpdateTakeBusy();
+  return true;
+}
+
+void MainWindow::OnCorpusOpenEnded(bool ok, const QString& message) {
+  std::shared_ptr<OpenedCorpus> result = std::move(opening_result_);
+  const QString path = opening_path_;
+  const QString select = opening_select_;
+  opening_path_.clear();
+  opening_select_.clear();
+  if (!next_open_.isEmpty()) {
+    // Superseded by a later open: never shown (its corpus closes with `result`).
+    const QString next = next_open_, next_select = next_open_select_;
+    next_open_.clear();
+    next_open_select_.clear();
+    OpenCorpus(next, next_select);
+    return;
+  }
+  UpdateTakeBusy();
+  if (!ok || !result || !result->corpus) {
+    const QString why = ok ? tr("nothing read") : message;
+    log_->Error(tr("Cannot open %1: %2").arg(path, why));
+    statusBar()->showMessage(tr("Cannot open %1 — see the log").arg(QFileInfo(path).fileName()), 8000);
+    emit CorpusOpenFailed(path, why);
+    return;
+  }
+  ShowOpenedCorpus(path, std::move(*result), select);
+  emit CorpusOpened(path);
+}
+
+void MainWindow::ShowOpenedCorpus(const QString& path, OpenedCorpus opened, const QString& select) {
+  const std::vector<TakeSummary>& takes = opened.takes;
+  corpus_ = std::move(opened.corpus);
+  take_.reset();
+  // A take still loading from the corpus shown before ends unseen.
+  if (!wanted_take_.isEmpty()) {
+    wanted_take_.clear();
+    ++wanted_id_;
+    take_loader_->Cancel();
+    UpdateTakeBusy();
+  }
+  seek_frame_ = -1;
+  labels_->ForgetSaved();
+  labels_->SetTake(std::string(), nullptr, label_tier_combo_->currentText().toStdString());
+  marker_view_->SetTake(nullptr);
+  plots_->SetTake(nullptr);
+  playback_->SetTake(0, 0, nullptr);
+  marker_combo_->clear();
+  browser_->SetTakes(takes);
+  AddRecent(path);
+  log_->Info(tr("Opened %1 (%n take(s))", nullptr, static_cast<int>(takes.size())).arg(path));
+  UpdateTitle();
+  if (takes.empty()) return;
+  QString first = QString::fromStdString(takes.front().name);
+  for (const TakeSummary& t : takes)
+    if (QString::fromStdString(t.name) == select) first = select;
+  browser_->SelectTake(first);
 }
 
 // What the take loader's worker hands to the GUI thread.
@@ -534,12 +614,16 @@ void MainWindow::OnTakeLoadEnded(bool ok, const QString& message) {
 }
 
 void MainWindow::UpdateTakeBusy() {
-  const bool busy = !wanted_take_.isEmpty();
+  const QString opening = !next_open_.isEmpty() ? next_open_ : opening_path_;
+  const bool busy = !wanted_take_.isEmpty() || !opening.isEmpty();
+  const QString what = !opening.isEmpty() ? tr("Opening %1…").arg(QFileInfo(opening).fileName())
+                                          : tr("Loading take %1…").arg(wanted_take_);
   take_busy_->setVisible(busy);
-  take_busy_->setToolTip(busy ? tr("Loading take %1…").arg(wanted_take_) : QString());
+  take_busy_->setToolTip(busy ? what : QString());
   if (busy) {
-    statusBar()->showMessage(tr("Loading take %1…").arg(wanted_take_));
-  } else if (statusBar()->currentMessage().startsWith(tr("Loading take"))) {
+    statusBar()->showMessage(what);
+  } else if (statusBar()->currentMessage().startsWith(tr("Loading take")) ||
+             statusBar()->currentMessage().startsWith(tr("Opening"))) {
     statusBar()->clearMessage();
   }
 }
@@ -808,6 +892,24 @@ FitDialog* MainWindow::ShowFitDialog() {
   fit_dialog_->show();
   fit_dialog_->raise();
   return fit_dialog_;
+}
+
+JobDialog* MainWindow::ShowJobDialog(const QString& id) {
+  const JobSpec* spec = FindAnalysisJob(id);
+  if (spec == nullptr) return nullptr;
+  JobDialog*& dialog = job_dialogs_[id];
+  if (dialog == nullptr) {
+    dialog = new JobDialog(*spec, log_, this);
+    // A job that wrote into the corpus: reopen it (off the GUI thread) on the shown take.
+    connect(dialog, &JobDialog::CorpusWritten, this, [this](const QString& corpus) {
+      if (corpus != corpus_path()) return;
+      OpenCorpus(corpus, take_ ? QString::fromStdString(take_->name) : QString());
+    });
+  }
+  if (!dialog->running()) dialog->SetCorpus(corpus_path());
+  dialog->show();
+  dialog->raise();
+  return dialog;
 }
 
 bool MainWindow::InspectErrors(const QString& model_file, const QStringList& takes) {

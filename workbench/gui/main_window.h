@@ -3,6 +3,7 @@
 // log as dockable views (layout remembered), recent files, background import
 // with progress and Cancel, playback and figure export.
 #include <QMainWindow>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -24,6 +25,7 @@ namespace csw::gui {
 class CorpusBrowser;
 class ErrorInspector;
 class FitDialog;
+class JobDialog;
 class ImportRunner;
 class JobRunner;
 class LabelCountsPanel;
@@ -43,8 +45,15 @@ class MainWindow : public QMainWindow {
   explicit MainWindow(const QString& settings_path = QString(), QWidget* parent = nullptr);
   ~MainWindow() override;
 
-  // Opens a corpus; on failure logs the error, keeps the current corpus and returns false.
-  bool OpenCorpus(const QString& path);
+  // Opens a corpus on a worker thread (the GUI thread never waits on HDF5) and,
+  // when it is open, shows it: takes listed, `select` (or the first take)
+  // selected, CorpusOpened emitted. On failure the error goes to the log and
+  // the status line, the current corpus stays, CorpusOpenFailed is emitted.
+  // An open requested while another runs supersedes it (the earlier one is
+  // never shown). False only for an empty path.
+  bool OpenCorpus(const QString& path, const QString& select = QString());
+  // A corpus is being opened (OpenCorpus has not ended yet).
+  bool corpus_opening() const { return !opening_path_.isEmpty() || !next_open_.isEmpty(); }
   // Shows one take of the open corpus: loads it on a worker thread (the GUI
   // thread never waits on HDF5) with a busy indication in the status bar, and
   // shows it when it arrives (TakeShown). A later selection supersedes one
@@ -53,7 +62,8 @@ class MainWindow : public QMainWindow {
   // no corpus is open; true at once when the take is already shown.
   bool SelectTake(const QString& name);
   // A selection is loading (or waits for the load it superseded to end).
-  bool take_loading() const { return !wanted_take_.isEmpty(); }
+  // True while a corpus opens too (its first take is shown next).
+  bool take_loading() const { return !wanted_take_.isEmpty() || corpus_opening(); }
   // The take being loaded for the latest selection, "" when none.
   QString loading_take() const { return wanted_take_; }
   // The take loader's runner: its worker hook (JobRunner::SetWorkerHook) sees
@@ -77,6 +87,11 @@ class MainWindow : public QMainWindow {
   bool SnapLabelToSpeedMinimum();
   // Shows the model-fit dialog (not modal) for the open corpus's takes.
   FitDialog* ShowFitDialog();
+  // Shows the dialog of an Analysis menu job (job_dialog.h: "cue",
+  // "keys-suggest", "keys-train", "keys-score", "phasing", "clean",
+  // "dict-build") on the open corpus; null for an unknown id. A job that
+  // writes into the corpus reopens it when it succeeds, on the shown take.
+  JobDialog* ShowJobDialog(const QString& id);
   // Inverts the models of `model_file` on the open corpus in the background and
   // shows the reconstruction-error inspector dock; false (and a log line) when
   // no corpus is open or an inspection runs. Clicking an utterance's bar shows
@@ -114,6 +129,8 @@ class MainWindow : public QMainWindow {
   QDockWidget* errors_dock() const { return errors_dock_; }
 
  signals:
+  void CorpusOpened(const QString& path);
+  void CorpusOpenFailed(const QString& path, const QString& message);
   void TakeShown(const QString& name);
   void TakeLoadFailed(const QString& name, const QString& message);
   void ImportFinished();
@@ -140,6 +157,9 @@ class MainWindow : public QMainWindow {
   void UpdateTitle();
   void StartTakeLoad();
   void OnTakeLoadEnded(bool ok, const QString& message);
+  struct OpenedCorpus;
+  void OnCorpusOpenEnded(bool ok, const QString& message);
+  void ShowOpenedCorpus(const QString& path, OpenedCorpus opened, const QString& select);
   struct LoadedTake;
   void ShowLoadedTake(LoadedTake loaded);
   void UpdateTakeBusy();
@@ -169,6 +189,7 @@ class MainWindow : public QMainWindow {
   QDockWidget* plots_dock_ = nullptr;
   QDockWidget* log_dock_ = nullptr;
   FitDialog* fit_dialog_ = nullptr;
+  std::map<QString, JobDialog*> job_dialogs_;
   ErrorInspector* error_inspector_ = nullptr;
   QDockWidget* errors_dock_ = nullptr;
   QMenu* recent_menu_ = nullptr;
@@ -188,6 +209,15 @@ class MainWindow : public QMainWindow {
   QString seek_take_;
   qint64 seek_frame_ = -1;
   bool close_requested_ = false;
+  // Corpus opening (OpenCorpus): one open at a time on corpus_opener_; a
+  // later request waits in next_open_ and supersedes the running one.
+  JobRunner* corpus_opener_ = nullptr;
+  QString opening_path_;
+  QString opening_select_;
+  QString next_open_;
+  QString next_open_select_;
+  std::shared_ptr<OpenedCorpus> opening_result_;
+  bool import_reopen_pending_ = false;
 };
 
 }  // namespace csw::gui

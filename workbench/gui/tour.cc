@@ -21,6 +21,7 @@
 #include "workbench/gui/error_inspector.h"
 #include "workbench/gui/fit_dialog.h"
 #include "workbench/gui/import_runner.h"
+#include "workbench/gui/job_dialog.h"
 #include "workbench/gui/job_runner.h"
 #include "workbench/gui/label_lane.h"
 #include "workbench/gui/label_session.h"
@@ -46,6 +47,13 @@ void WaitForTake(MainWindow& window, int timeout_ms = 60000) {
     if (!window.take_loading()) loop.quit();
   });
   QObject::connect(&window, &MainWindow::TakeLoadFailed, &loop, [&] {
+    if (!window.take_loading()) loop.quit();
+  });
+  // A corpus that failed to open (or holds no take) shows no new take.
+  QObject::connect(&window, &MainWindow::CorpusOpenFailed, &loop, [&] {
+    if (!window.take_loading()) loop.quit();
+  });
+  QObject::connect(&window, &MainWindow::CorpusOpened, &loop, [&] {
     if (!window.take_loading()) loop.quit();
   });
   timeout.start(timeout_ms);
@@ -304,6 +312,27 @@ QStringList RunTour(const TourOptions& options) {
     }
     written << Shot(view, options.out_dir, QStringLiteral("reconstruction-3d.png"));
     window.errors_dock()->hide();
+
+    // 9. Analysis > Suggest Target Frames on the virtual cuer's takes: the
+    // dialog with the job's text output, then the corpus reopened on its take.
+    JobDialog* suggest = window.ShowJobDialog(QStringLiteral("keys-suggest"));
+    if (suggest == nullptr) throw Error("tour: no keys-suggest job");
+    suggest->SetValue(QStringLiteral("takes"), cuer_takes.join(QStringLiteral(", ")));
+    suggest->move(window.geometry().center() - QPoint(suggest->width() / 2, suggest->height() / 2));
+    QString job_outcome;
+    auto job_finished = QObject::connect(suggest, &JobDialog::JobFinished, &loop, [&](const QString& o) {
+      job_outcome = o;
+      loop.quit();
+    });
+    if (!suggest->Start())
+      throw Error("tour: keys suggest did not start: " + suggest->status_label()->text().toStdString());
+    loop.exec();
+    QObject::disconnect(job_finished);
+    if (job_outcome != QStringLiteral("succeeded")) throw Error("tour: keys suggest " + job_outcome.toStdString());
+    WaitForTake(window);
+    Settle(300);
+    written << Shot(suggest, options.out_dir, QStringLiteral("analysis-job.png"));
+    suggest->hide();
   }
 
   window.close();
