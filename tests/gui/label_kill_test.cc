@@ -1,6 +1,7 @@
 // Crash safety of label autosave (issue 16, done-when): a labelling session in
 // a real csw-workbench window (label_kill_child.cc, offscreen) is killed with
-// SIGKILL while it edits a label every kPeriodMs; afterwards the corpus must
+// SIGKILL while it edits a label every kPeriodMs (twice, at two phases of the
+// edit and autosave cycles); afterwards the corpus must
 // open, be writable again (the dead writer's lock is gone) and hold every edit
 // older than the autosave delay plus a margin, with its code at its frame, and
 // nothing the session never typed. Times are compared on one clock:
@@ -97,7 +98,8 @@ class LineReader {
   std::string buffer_;
 };
 
-TEST(LabelKill, SigkillDuringLabellingKeepsEveryEditOlderThanTheAutosaveDelay) {
+// One session on a fresh corpus, killed `extra_ms` after its kEditsBeforeKill-th edit.
+void KillSessionAndCheck(int extra_ms) {
   testing::TempDir dir;
   const std::string corpus = (dir / "corpus.h5").string();
   {
@@ -148,6 +150,10 @@ TEST(LabelKill, SigkillDuringLabellingKeepsEveryEditOlderThanTheAutosaveDelay) {
   while (static_cast<int>(edits.size()) < kEditsBeforeKill &&
          reader.Next(&line, ready ? 10 * kPeriodMs + 5000 : kStartTimeoutMs)) {
     parse(line);
+  }
+  if (extra_ms > 0) {
+    const long long until = NowNs() + static_cast<long long>(extra_ms) * 1'000'000;
+    while (NowNs() < until && reader.Next(&line, static_cast<int>((until - NowNs()) / 1'000'000) + 1)) parse(line);
   }
   const long long kill_ns = NowNs();
   ASSERT_EQ(::kill(pid, SIGKILL), 0);
@@ -211,10 +217,19 @@ TEST(LabelKill, SigkillDuringLabellingKeepsEveryEditOlderThanTheAutosaveDelay) {
     EXPECT_TRUE(it != typed.end() && it->second == code) << "stored " << code << " at frame " << frame;
   }
   std::printf(
-      "SIGKILL after %zu edits (every %d ms, autosave %d ms, %d saves reported): %zu stored, %d older than %.1f s "
+      "SIGKILL %d ms after edit %d (%zu edits in all, one every %d ms; autosave %d ms; %d saves reported): %zu stored, "
+      "%d older than %.1f s "
       "all stored; newest stored edit made %.2f s before the kill\n",
-      edits.size(), kPeriodMs, kAutosaveMs, saves, stored.size(), checked,
+      extra_ms, kEditsBeforeKill, edits.size(), kPeriodMs, kAutosaveMs, saves, stored.size(), checked,
       static_cast<double>(kAutosaveMs) / 1000.0 + static_cast<double>(kMarginNs) / 1e9, newest_stored_age_s);
+}
+
+// Two kills at different phases of the edit and autosave cycles.
+TEST(LabelKill, SigkillDuringLabellingKeepsEveryEditOlderThanTheAutosaveDelay) {
+  for (int extra_ms : {0, 170}) {
+    SCOPED_TRACE("killed " + std::to_string(extra_ms) + " ms after the last edit awaited");
+    KillSessionAndCheck(extra_ms);
+  }
 }
 
 }  // namespace
