@@ -12,7 +12,9 @@
 #include <QAction>
 #include <QApplication>
 #include <QComboBox>
+#include <QImage>
 #include <QLineEdit>
+#include <QPixmap>
 #include <QSignalSpy>
 #include <QTest>
 #include <QUndoStack>
@@ -398,6 +400,230 @@ TEST_F(LabelLaneTest, ATierAnotherWriterStoredMeanwhileIsKeptByTheNextAutosave) 
     EXPECT_EQ(take.tiers[i].name, tiers[i].name);
     EXPECT_EQ(take.tiers[i].labels.size(), tiers[i].labels.size());
   }
+}
+
+// Guides for labelling stored with take alpha, as `csw keys suggest` and `csw cue`
+// write them: suggested targets at frames 8, 19, 30 (stored 0.1 frame late, at
+// 0.301 s) and 44; expected keys 13 [0, 0.10), a pause, 25 [0.18, 0.30),
+// 41 [0.30, 0.42), 00 [0.42, 0.50), whose middle frames are 5, 24, 36 and 46.
+void StoreGuideTiers(const std::string& corpus) {
+  std::vector<LabelTier> tiers = Corpus::Open(corpus).LoadTiers("alpha");
+  tiers.push_back({"keys_suggested",
+                   LabelTier::Kind::kPoint,
+                   0.0,
+                   0.5,
+                   {{0.08, 0.08, "13"}, {0.19, 0.19, "25"}, {0.301, 0.301, "41"}, {0.44, 0.44, "00"}}});
+  tiers.push_back({"expected_keys",
+                   LabelTier::Kind::kInterval,
+                   0.0,
+                   0.5,
+                   {{0.0, 0.10, "13"}, {0.10, 0.18, ""}, {0.18, 0.30, "25"}, {0.30, 0.42, "41"}, {0.42, 0.50, "00"}}});
+  CorpusTransaction tx(corpus);
+  tx.WriteTiers("alpha", tiers);
+  tx.Commit();
+}
+
+// Pixels of `colour` in the lane's columns within 6 px of time t.
+int PixelsNear(LabelLane& lane, double t, QColor colour) {
+  const QImage image = lane.grab().toImage();
+  const int x = static_cast<int>(std::lround(lane.XOfTime(t)));
+  int n = 0;
+  for (int dx = -6; dx <= 6; ++dx) {
+    for (int y = 0; y < image.height(); ++y) {
+      if (x + dx >= 0 && x + dx < image.width() && image.pixelColor(x + dx, y).rgb() == colour.rgb()) ++n;
+    }
+  }
+  return n;
+}
+
+// N jumps to the next suggested target with no label within 2 frames; Enter
+// accepts the one on (or within 2 frames of) the cursor and moves on; one
+// acceptance undone disappears; the three accepted are autosaved and found at
+// the suggested frames with the suggested codes after reopening.
+TEST_F(LabelLaneTest, EnterAcceptsThreeSuggestedTargetsAndNSkipsTheAccepted) {
+  StoreGuideTiers(corpus_);
+  auto w = OpenWindow("accepted_keys");
+  LabelSession& s = *w->labels();
+  ASSERT_EQ(s.suggestions().size(), 4u);
+  EXPECT_EQ(s.suggestions()[2].frame, 30);  // 0.301 s is on frame 30
+  EXPECT_EQ(s.model()->size(), 0u);
+  const QColor open(0, 150, 70), accepted(160, 160, 160);
+  EXPECT_GT(PixelsNear(*w->label_lane(), 0.08, open), 0);
+  EXPECT_EQ(PixelsNear(*w->label_lane(), 0.08, accepted), 0);
+
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_N);
+  EXPECT_EQ(w->playback()->frame(), 8);
+  Key(*w, Qt::Key_Return);  // accepts 13 at 8, moves to 19
+  EXPECT_EQ(ModelLabels(s), (Labels{{8, "13"}}));
+  EXPECT_EQ(w->playback()->frame(), 19);
+  EXPECT_EQ(PixelsNear(*w->label_lane(), 0.08, open), 0);
+  EXPECT_GT(PixelsNear(*w->label_lane(), 0.08, accepted), 0);
+  Key(*w, Qt::Key_Return);  // 25 at 19, moves to 30
+  EXPECT_EQ(w->playback()->frame(), 30);
+  // Two frames off the suggestion still accepts it, at its own frame.
+  Key(*w, Qt::Key_Right);
+  Key(*w, Qt::Key_Right);  // 32
+  Key(*w, Qt::Key_Enter);  // the keypad's Enter too
+  EXPECT_EQ(ModelLabels(s), (Labels{{8, "13"}, {19, "25"}, {30, "41"}}));
+  EXPECT_EQ(w->playback()->frame(), 44);
+  // Three frames off accepts nothing (a line in the log).
+  Key(*w, Qt::Key_Left);
+  Key(*w, Qt::Key_Left);
+  Key(*w, Qt::Key_Left);  // 41
+  const int infos = w->log()->CountLevel(LogPanel::Level::kInfo);
+  Key(*w, Qt::Key_Return);
+  EXPECT_EQ(s.model()->size(), 3u);
+  EXPECT_EQ(w->log()->CountLevel(LogPanel::Level::kInfo), infos + 1);
+  EXPECT_EQ(w->playback()->frame(), 41);
+  Key(*w, Qt::Key_Right);  // 42
+  Key(*w, Qt::Key_Return);
+  EXPECT_EQ(ModelLabels(s), (Labels{{8, "13"}, {19, "25"}, {30, "41"}, {44, "00"}}));
+  EXPECT_EQ(w->playback()->frame(), 44);  // no open suggestion left: the cursor stays
+  EXPECT_EQ(s.undo_stack()->count(), 4);
+  EXPECT_EQ(s.undo_stack()->undoText(), "add key 00 at 0.440 s");
+  Key(*w, Qt::Key_N);
+  Key(*w, Qt::Key_N, Qt::ShiftModifier);
+  EXPECT_EQ(w->playback()->frame(), 44);  // every suggestion is accepted
+
+  // The last acceptance undone: it disappears, and N finds that suggestion again.
+  Key(*w, Qt::Key_Z, Qt::ControlModifier);
+  const Labels three{{8, "13"}, {19, "25"}, {30, "41"}};
+  EXPECT_EQ(ModelLabels(s), three);
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_N);
+  EXPECT_EQ(w->playback()->frame(), 44);
+  Key(*w, Qt::Key_N, Qt::ShiftModifier);
+  EXPECT_EQ(w->playback()->frame(), 44);
+
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !s.HasUnsavedEdits(); }, kWaitMs));
+  EXPECT_EQ(StoredLabels(corpus_, "accepted_keys"), three);
+  for (const LabelTier& t : Corpus::Open(corpus_).LoadTiers("alpha")) {
+    if (t.name == "keys_suggested") {
+      EXPECT_EQ(t.labels.size(), 4u);  // the suggestions are not edited
+    }
+  }
+  w.reset();
+  auto again = OpenWindow("accepted_keys");
+  EXPECT_EQ(ModelLabels(*again->labels()), three);
+  Key(*again, Qt::Key_Home);
+  Key(*again, Qt::Key_N);
+  EXPECT_EQ(again->playback()->frame(), 44);
+  EXPECT_EQ(again->log()->CountLevel(LogPanel::Level::kError), 0);
+  EXPECT_EQ(again->log()->CountLevel(LogPanel::Level::kWarning), 0);
+}
+
+// E / Shift+E jump to the middle frame of the next / previous expected key with
+// no label in its interval; the suggestion tier can be another one.
+TEST_F(LabelLaneTest, EJumpsToTheNextExpectedKeyWithoutALabel) {
+  StoreGuideTiers(corpus_);
+  auto w = OpenWindow("keys");
+  LabelSession& s = *w->labels();
+  ASSERT_EQ(s.expected_keys().size(), 4u);  // the pause is no key
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);
+  for (int i = 0; i < 6; ++i) Key(*w, Qt::Key_Right);  // 26, inside 25's interval
+  Type(*w, "25");
+  Key(*w, Qt::Key_Home);
+  std::vector<int64_t> visited;
+  for (int i = 0; i < 4; ++i) {
+    Key(*w, Qt::Key_E);
+    visited.push_back(w->playback()->frame());
+  }
+  EXPECT_EQ(visited, (std::vector<int64_t>{5, 36, 46, 46}));  // 24 is labelled; after 46 none
+  visited.clear();
+  for (int i = 0; i < 3; ++i) {
+    Key(*w, Qt::Key_E, Qt::ShiftModifier);
+    visited.push_back(w->playback()->frame());
+  }
+  EXPECT_EQ(visited, (std::vector<int64_t>{36, 5, 5}));
+  Type(*w, "13");  // on 5: its key is labelled now
+  Key(*w, Qt::Key_End);
+  Key(*w, Qt::Key_E, Qt::ShiftModifier);
+  EXPECT_EQ(w->playback()->frame(), 46);
+  Key(*w, Qt::Key_E, Qt::ShiftModifier);
+  EXPECT_EQ(w->playback()->frame(), 36);
+  Key(*w, Qt::Key_E, Qt::ShiftModifier);
+  EXPECT_EQ(w->playback()->frame(), 36);
+  // The expected keys are drawn: 41's band (unlabelled) is tinted, not the lane's plain base.
+  const QImage image = w->label_lane()->grab().toImage();
+  const QColor base = w->label_lane()->palette().base().color();
+  const int x = static_cast<int>(std::lround(w->label_lane()->XOfTime(0.33)));
+  EXPECT_NE(image.pixelColor(x, image.height() / 4).rgb(), base.rgb());
+  const int x_pause = static_cast<int>(std::lround(w->label_lane()->XOfTime(0.14)));
+  EXPECT_EQ(image.pixelColor(x_pause, image.height() / 4).rgb(), base.rgb());
+
+  // Another suggestion tier: a missing one gives no suggestions, N does nothing.
+  ASSERT_EQ(s.suggestions().size(), 4u);
+  s.SetSuggestionTier("placement_suggested");
+  EXPECT_TRUE(s.suggestions().empty());
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_N);
+  EXPECT_EQ(w->playback()->frame(), 0);
+  s.SetSuggestionTier("keys_suggested");
+  Key(*w, Qt::Key_N);
+  EXPECT_EQ(w->playback()->frame(), 8);
+  // An interval tier of words is no suggestion tier: a warning, no suggestions.
+  const int warnings = w->log()->CountLevel(LogPanel::Level::kWarning);
+  s.SetSuggestionTier("words");
+  EXPECT_TRUE(s.suggestions().empty());
+  EXPECT_EQ(w->log()->CountLevel(LogPanel::Level::kWarning), warnings + 1);
+}
+
+// U / Shift+U jump to the first frame of the next / previous run of frames where
+// the stored key posteriors (score set "keys", as `csw keys score` stores it,
+// read by the take loader) have a largest value below 0.6: shape unsure on
+// frames 12-14 and 33-34, placement on frame 40 (its score rows start at
+// 0.002 s, so frame f is row f, rounded).
+TEST_F(LabelLaneTest, UJumpsToTheNextFrameWhereTheRecogniserIsUnsure) {
+  TakeScores scores;
+  scores.name = "keys";
+  scores.rate_hz = kRate;
+  scores.start_s = 0.002;
+  ScoreMatrix shape{"shape", kFrames, 3, {}, {}};
+  ScoreMatrix placement{"placement", kFrames, 2, {}, {}};
+  for (int f = 0; f < kFrames; ++f) {
+    const bool unsure = (f >= 12 && f <= 14) || f == 33 || f == 34;
+    shape.values.insert(shape.values.end(), {unsure ? 0.5 : 0.9, unsure ? 0.3 : 0.05, unsure ? 0.2 : 0.05});
+    placement.values.insert(placement.values.end(), {f == 40 ? 0.55 : 0.7, f == 40 ? 0.45 : 0.3});
+  }
+  scores.matrices = {placement, shape};
+  {
+    CorpusTransaction tx(corpus_);
+    tx.WriteScores("alpha", scores);
+    tx.Commit();
+  }
+  std::vector<uint8_t> expected(kFrames, 0);
+  for (int f : {12, 13, 14, 33, 34, 40}) expected[static_cast<size_t>(f)] = 1;
+  EXPECT_EQ(UnsureFrames(scores, kFrames, kRate, LabelSession::kUnsurePosterior), expected);
+
+  auto w = OpenWindow("keys");
+  EXPECT_EQ(w->labels()->unsure_frames(), expected);
+  Key(*w, Qt::Key_Home);
+  std::vector<int64_t> visited;
+  for (int i = 0; i < 4; ++i) {
+    Key(*w, Qt::Key_U);
+    visited.push_back(w->playback()->frame());
+  }
+  EXPECT_EQ(visited, (std::vector<int64_t>{12, 33, 40, 40}));
+  Key(*w, Qt::Key_Left);  // 39
+  visited.clear();
+  for (int i = 0; i < 3; ++i) {
+    Key(*w, Qt::Key_U, Qt::ShiftModifier);
+    visited.push_back(w->playback()->frame());
+  }
+  EXPECT_EQ(visited, (std::vector<int64_t>{33, 12, 12}));
+  // Drawn as a red strip under the unsure frames only.
+  const QImage image = w->label_lane()->grab().toImage();
+  const QColor base = w->label_lane()->palette().base().color();
+  const int y = image.height() - 3;
+  const auto x = [&](double t) { return static_cast<int>(std::lround(w->label_lane()->XOfTime(t))); };
+  EXPECT_NE(image.pixelColor(x(0.13), y).rgb(), base.rgb());
+  EXPECT_EQ(image.pixelColor(x(0.25), y).rgb(), base.rgb());
+  // Another tier of the same take keeps them.
+  ASSERT_TRUE(w->SetLabelTier("other"));
+  EXPECT_EQ(w->labels()->unsure_frames(), expected);
 }
 
 TEST(NearestSpeedMinimum, FindsTheNearestLocalMinimumWithinTheWindow) {

@@ -5,7 +5,9 @@
 #include <QKeyEvent>
 #include <QMouseEvent>
 #include <QPainter>
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "workbench/gui/label_session.h"
 
@@ -81,6 +83,51 @@ void LabelLane::paintEvent(QPaintEvent*) {
   if (!session_->has_take()) return;
   p.setClipRect(QRect(left, 0, right - left + 1, height()));
 
+  // Expected keys: faint bands over their intervals (fainter once labelled), code at the bottom right.
+  const auto& expected = session_->expected_keys();
+  for (size_t i = 0; i < expected.size(); ++i) {
+    const auto& span = expected[i];
+    if (span.end_s < t0_ || span.start_s > t1_) continue;
+    const bool labelled = session_->ExpectedKeyLabelled(i);
+    const QRectF band(QPointF(X(span.start_s), 1), QPointF(X(span.end_s), height() - 1));
+    p.fillRect(band.adjusted(0.5, 0, -0.5, 0),
+               labelled ? QColor(150, 150, 150, 28) : QColor(230, 150, 30, i % 2 == 0 ? 50 : 36));
+    p.setPen(QColor(130, 100, 60, labelled ? 90 : 170));
+    p.drawText(band.adjusted(2, 0, -2, -1), Qt::AlignBottom | Qt::AlignRight, span.code);
+  }
+  // Unsure frames: a red strip along the bottom.
+  const std::vector<uint8_t>& unsure = session_->unsure_frames();
+  const auto shown_end =
+      static_cast<size_t>(std::clamp<int64_t>(session_->TimeFrame(t1_) + 2, 0, static_cast<int64_t>(unsure.size())));
+  for (auto f = static_cast<size_t>(
+           std::clamp<int64_t>(session_->TimeFrame(t0_) - 1, 0, static_cast<int64_t>(unsure.size())));
+       f < shown_end;) {
+    if (unsure[f] == 0) {
+      ++f;
+      continue;
+    }
+    size_t end = f;
+    while (end < shown_end && unsure[end] != 0) ++end;
+    const double xa = X(session_->FrameTime(static_cast<int64_t>(f)) - 0.5 / session_->rate_hz());
+    const double xb = X(session_->FrameTime(static_cast<int64_t>(end) - 1) + 0.5 / session_->rate_hz());
+    p.fillRect(QRectF(QPointF(xa, height() - 5), QPointF(std::max(xb, xa + 1), height() - 1)),
+               QColor(210, 40, 40, 150));
+    f = end;
+  }
+  // Suggested targets: hollow circles on a dashed stem, green while open, grey once accepted.
+  const auto& suggestions = session_->suggestions();
+  for (size_t i = 0; i < suggestions.size(); ++i) {
+    const double t = session_->FrameTime(suggestions[i].frame);
+    if (t < t0_ || t > t1_) continue;
+    const double x = X(t);
+    const QColor colour = session_->SuggestionAccepted(i) ? QColor(160, 160, 160) : QColor(0, 150, 70);
+    p.setPen(QPen(colour, 1.0, Qt::DashLine));
+    p.drawLine(QPointF(x, height() * 0.45), QPointF(x, height() - 2));
+    p.setPen(QPen(colour, 1.5));
+    p.setBrush(Qt::NoBrush);
+    p.drawEllipse(QPointF(x, height() * 0.72), 4.0, 4.0);
+  }
+
   const LabelModel& model = *session_->model();
   const long sel = selected();
   QFont bold = small;
@@ -111,9 +158,12 @@ bool LabelLane::event(QEvent* e) {
     const bool digit = key >= Qt::Key_0 && key <= Qt::Key_9 && mods == Qt::NoModifier;
     const bool arrows =
         (key == Qt::Key_Left || key == Qt::Key_Right) && (mods == Qt::AltModifier || mods == Qt::ControlModifier);
-    const bool other =
-        (key == Qt::Key_Delete || key == Qt::Key_Backspace || key == Qt::Key_Escape) && mods == Qt::NoModifier;
-    if (digit || arrows || other) {
+    const bool other = (key == Qt::Key_Delete || key == Qt::Key_Backspace || key == Qt::Key_Escape ||
+                        key == Qt::Key_Return || key == Qt::Key_Enter) &&
+                       mods == Qt::NoModifier;
+    const bool guides = (key == Qt::Key_N || key == Qt::Key_E || key == Qt::Key_U) &&
+                        (mods == Qt::NoModifier || mods == Qt::ShiftModifier);
+    if (digit || arrows || other || guides) {
       e->accept();
       return true;
     }
@@ -150,6 +200,23 @@ bool LabelLane::HandleKey(int key, Qt::KeyboardModifiers mods, const QString& /*
   }
   if (key == Qt::Key_S && mods == Qt::NoModifier) {
     emit SnapRequested();
+    return true;
+  }
+  if ((key == Qt::Key_N || key == Qt::Key_E || key == Qt::Key_U) &&
+      (mods == Qt::NoModifier || mods == Qt::ShiftModifier)) {
+    const int direction = mods == Qt::ShiftModifier ? -1 : 1;
+    const int64_t to = key == Qt::Key_N   ? session_->NextOpenSuggestion(cursor_frame_, direction)
+                       : key == Qt::Key_E ? session_->NextOpenExpectedKey(cursor_frame_, direction)
+                                          : session_->NextUnsureFrame(cursor_frame_, direction);
+    if (to >= 0) Seek(to);
+    return true;
+  }
+  if ((key == Qt::Key_Return || key == Qt::Key_Enter) && mods == Qt::NoModifier) {
+    pending_.clear();
+    const int64_t at = session_->AcceptSuggestion(cursor_frame_);
+    if (at < 0) return true;
+    const int64_t next = session_->NextOpenSuggestion(at, 1);
+    Seek(next >= 0 ? next : at);
     return true;
   }
   if (key == Qt::Key_Escape && mods == Qt::NoModifier) {

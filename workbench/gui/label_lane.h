@@ -11,8 +11,21 @@
 //   Ctrl+Right / Ctrl+Left  jump to the next / previous label
 //   S                    snap the label on the cursor frame to the nearest
 //                        speed minimum of the marker lane's marker (SnapRequested)
+//   N / Shift+N          jump to the next / previous open suggested target
+//                        (LabelSession::suggestions: no label within 2 frames)
+//   Enter (Return)       accept the open suggestion on the cursor frame or
+//                        within 2 frames of it (one undoable add of its code at
+//                        its frame), then jump to the next open suggestion
+//   E / Shift+E          jump to the middle of the next / previous expected key
+//                        with no label inside its interval
+//   U / Shift+U          jump to the start of the next / previous run of frames
+//                        where the key recogniser is unsure (stored posteriors;
+//                        LabelSession::NextUnsureFrame)
 //   click                move the cursor there (onto a label within 6 px)
 // Undo / redo are the window's Ctrl+Z / Ctrl+Shift+Z (the session's QUndoStack).
+// Suggested targets are drawn as hollow green circles (grey once accepted),
+// expected keys as faint bands over their intervals with their code, unsure
+// frames as a red strip along the bottom.
 #include <QWidget>
 
 class QCustomPlot;
@@ -39,6 +52,8 @@ class LabelLane : public QWidget {
   double view_end() const { return t1_; }
   // Index of the label on the cursor frame, or -1.
   long selected() const;
+  // The lane's x (pixels) of a time, as drawn.
+  double XOfTime(double t) const { return X(t); }
 
  public slots:
   void SetCursorFrame(qint64 frame);

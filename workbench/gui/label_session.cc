@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 
 #include "core/error.h"
 #include "io/corpus/corpus.h"
@@ -41,6 +42,32 @@ int64_t NearestSpeedMinimum(const std::vector<float>& speed, int64_t frame, int6
     i = j;
   }
   return best;
+}
+
+std::vector<uint8_t> UnsureFrames(const TakeScores& scores, int64_t frames, double rate_hz, double threshold) {
+  std::vector<uint8_t> unsure(static_cast<size_t>(std::max<int64_t>(0, frames)), 0);
+  if (rate_hz <= 0 || scores.rate_hz <= 0) return unsure;
+  std::vector<const ScoreMatrix*> used;
+  for (const ScoreMatrix& m : scores.matrices) {
+    if (m.name == "shape" || m.name == "placement") used.push_back(&m);
+  }
+  if (used.empty()) {
+    for (const ScoreMatrix& m : scores.matrices) used.push_back(&m);
+  }
+  for (int64_t f = 0; f < frames; ++f) {
+    const double t = static_cast<double>(f) / rate_hz;
+    const int64_t row = std::llround((t - scores.start_s) * scores.rate_hz);
+    for (const ScoreMatrix* m : used) {
+      if (row < 0 || row >= m->rows || m->cols <= 0) continue;
+      double best = -std::numeric_limits<double>::infinity();
+      for (int64_t c = 0; c < m->cols; ++c) {
+        const double v = m->values[static_cast<size_t>(row * m->cols + c)];
+        if (std::isfinite(v)) best = std::max(best, v);
+      }
+      if (std::isfinite(best) && best < threshold) unsure[static_cast<size_t>(f)] = 1;
+    }
+  }
+  return unsure;
 }
 
 // ---------------------------------------------------------------------------
@@ -229,7 +256,142 @@ void LabelSession::SetTake(const std::string& corpus, std::shared_ptr<const Take
   tier_name_ = tier_name;
   rate_hz_ = take ? take->rate_hz : 0.0;
   frames_ = take ? take->frames() : 0;
+  ReadGuides();
   emit LabelsChanged();
+}
+
+void LabelSession::SetSuggestionTier(const std::string& name) {
+  suggestion_tier_ = name;
+  ReadGuides();
+  emit LabelsChanged();
+}
+
+void LabelSession::SetExpectedTier(const std::string& name) {
+  expected_tier_ = name;
+  ReadGuides();
+  emit LabelsChanged();
+}
+
+void LabelSession::ReadGuides() {
+  suggestions_.clear();
+  expected_.clear();
+  if (!model_ || !take_) return;
+  const std::string where = corpus_ + ": take '" + take_name_ + "'";
+  for (const LabelTier& t : base_tiers_) {
+    if (t.name == tier_name_) continue;  // the tier labelled guides nothing
+    try {
+      if (t.name == suggestion_tier_) {
+        for (const KeyMark& m : ReadKeyTier(t, where)) {
+          const int64_t f = TimeFrame(m.time_s);
+          if (f >= 0 && f < frames_) suggestions_.push_back({f, QString::fromStdString(m.code.Text())});
+        }
+      } else if (t.name == expected_tier_) {
+        for (const ExpectedKey& k : ReadExpectedKeyTier(t, where)) {
+          const int64_t middle = std::clamp<int64_t>(TimeFrame(0.5 * (k.start_s + k.end_s)), 0, frames_ - 1);
+          expected_.push_back({k.start_s, k.end_s, middle, QString::fromStdString(k.code.Text())});
+        }
+      }
+    } catch (const std::exception& e) {
+      log_->Warning(tr("Tier %1 not shown as a guide in the label lane: %2")
+                        .arg(QString::fromStdString(t.name), QString::fromStdString(e.what())));
+      if (t.name == suggestion_tier_) suggestions_.clear();
+      if (t.name == expected_tier_) expected_.clear();
+    }
+  }
+  std::stable_sort(suggestions_.begin(), suggestions_.end(),
+                   [](const Suggestion& a, const Suggestion& b) { return a.frame < b.frame; });
+  std::stable_sort(expected_.begin(), expected_.end(),
+                   [](const ExpectedKeySpan& a, const ExpectedKeySpan& b) { return a.start_s < b.start_s; });
+}
+
+bool LabelSession::SuggestionAccepted(size_t index) const {
+  if (!model_ || rate_hz_ <= 0 || index >= suggestions_.size()) return false;
+  const double tolerance = (static_cast<double>(kSuggestionToleranceFrames) + 0.49) / rate_hz_;
+  return model_->Find(FrameTime(suggestions_[index].frame), tolerance) >= 0;
+}
+
+bool LabelSession::ExpectedKeyLabelled(size_t index) const {
+  if (!model_ || index >= expected_.size()) return false;
+  const ExpectedKeySpan& span = expected_[index];
+  for (size_t i = 0; i < model_->size(); ++i) {
+    const double t = model_->at(i).start_s;
+    if (t >= span.start_s && t < span.end_s) return true;
+  }
+  return false;
+}
+
+int64_t LabelSession::NextOpenSuggestion(int64_t frame, int direction) const {
+  const auto n = suggestions_.size();
+  for (size_t k = 0; k < n; ++k) {
+    const size_t i = direction > 0 ? k : n - 1 - k;
+    const int64_t f = suggestions_[i].frame;
+    if ((direction > 0 ? f > frame : f < frame) && !SuggestionAccepted(i)) return f;
+  }
+  return -1;
+}
+
+long LabelSession::OpenSuggestionNear(int64_t frame) const {
+  long best = -1;
+  int64_t best_distance = kSuggestionToleranceFrames + 1;
+  for (size_t i = 0; i < suggestions_.size(); ++i) {
+    const int64_t d = std::abs(suggestions_[i].frame - frame);
+    if (d < best_distance && !SuggestionAccepted(i)) {
+      best_distance = d;
+      best = static_cast<long>(i);
+    }
+  }
+  return best;
+}
+
+int64_t LabelSession::AcceptSuggestion(int64_t frame) {
+  if (!model_) return -1;
+  const long index = OpenSuggestionNear(frame);
+  if (index < 0) {
+    log_->Info(tr("No open suggested target (tier %1) within %2 frames of frame %3")
+                   .arg(QString::fromStdString(suggestion_tier_))
+                   .arg(kSuggestionToleranceFrames)
+                   .arg(frame + (take_ ? take_->first_frame : 0)));
+    return -1;
+  }
+  const Suggestion s = suggestions_[static_cast<size_t>(index)];
+  return AddLabel(s.frame, s.code) ? s.frame : -1;
+}
+
+void LabelSession::SetUnsureFrames(const std::string& take, std::vector<uint8_t> unsure) {
+  unsure_take_ = take;
+  unsure_ = std::move(unsure);
+  emit LabelsChanged();
+}
+
+const std::vector<uint8_t>& LabelSession::unsure_frames() const {
+  static const std::vector<uint8_t> kNone;
+  return model_ && unsure_take_ == take_name_ ? unsure_ : kNone;
+}
+
+int64_t LabelSession::NextUnsureFrame(int64_t frame, int direction) const {
+  const std::vector<uint8_t>& u = unsure_frames();
+  const auto n = static_cast<int64_t>(u.size());
+  auto run_start = [&](int64_t f) {
+    return u[static_cast<size_t>(f)] != 0 && (f == 0 || u[static_cast<size_t>(f - 1)] == 0);
+  };
+  if (direction > 0) {
+    for (int64_t f = std::max<int64_t>(0, frame + 1); f < n; ++f)
+      if (run_start(f)) return f;
+  } else {
+    for (int64_t f = std::min(frame - 1, n - 1); f >= 0; --f)
+      if (run_start(f)) return f;
+  }
+  return -1;
+}
+
+int64_t LabelSession::NextOpenExpectedKey(int64_t frame, int direction) const {
+  const auto n = expected_.size();
+  for (size_t k = 0; k < n; ++k) {
+    const size_t i = direction > 0 ? k : n - 1 - k;
+    const int64_t f = expected_[i].middle_frame;
+    if ((direction > 0 ? f > frame : f < frame) && !ExpectedKeyLabelled(i)) return f;
+  }
+  return -1;
 }
 
 std::optional<std::vector<LabelTier>> LabelSession::KnownTiers(const std::string& corpus,
@@ -308,7 +470,9 @@ bool LabelSession::DeleteLabel(long index) {
 
 void LabelSession::OnChanged() {
   if (clearing_) return;
-  if (model_) autosave_timer_.start();  // restarts: saves a few seconds after the last change
+  // Not restarted by later changes: an edit reaches a snapshot within the delay
+  // even while the user keeps labelling.
+  if (model_ && !autosave_timer_.isActive()) autosave_timer_.start();
   emit LabelsChanged();
 }
 

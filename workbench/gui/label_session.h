@@ -1,15 +1,21 @@
 #pragma once
 // Labelling one key tier of one take: the core label model (core/labels.h)
-// edited through undoable commands on a QUndoStack, and autosave. Every change
-// (an edit, an undo, a redo) restarts a single-shot timer; when it fires, a
-// snapshot of the take's tiers is handed to a TierSaver, which commits it to
-// the corpus on its own thread (CorpusTransaction + WriteTiers: only that
-// take's tier file and a fresh index are written; the tiers edited replace
-// their namesakes among those stored, so tiers another writer stored meanwhile
-// are kept). The GUI thread never waits
-// on HDF5. When the corpus's writer lock is held by another writer the save
-// fails, a warning goes to the log once, and the newest snapshot is retried
-// until it is written: an edit is never dropped.
+// edited through undoable commands on a QUndoStack, and autosave. The first
+// change (an edit, an undo, a redo) not yet in a snapshot starts a single-shot
+// timer, which later changes do not restart (so that labelling without a pause
+// is still saved every few seconds); when it fires, a snapshot of the take's tiers is handed to a TierSaver, which
+// commits it to the corpus on its own thread (CorpusTransaction + WriteTiers: only that take's tier file and a fresh
+// index are written; the tiers edited replace their namesakes among those stored, so tiers another writer stored
+// meanwhile are kept). The GUI thread never waits on HDF5. When the corpus's writer lock is held by another writer the
+// save fails, a warning goes to the log once, and the newest snapshot is retried until it is written: an edit is never
+// dropped.
+//
+// Guides for labelling, read from the take's other tiers when the take is set:
+// the suggested targets (a point tier of key codes, default `keys_suggested`,
+// written by `csw keys suggest`) and the expected keys (an interval tier,
+// default `expected_keys`, written by `csw cue`). A suggestion is open while
+// the labelled tier has no label within kSuggestionToleranceFrames of it; an
+// expected key is open while the labelled tier has no label inside its interval.
 #include <QObject>
 #include <QString>
 #include <QTimer>
@@ -27,9 +33,20 @@
 #include "core/labels.h"
 #include "core/take.h"
 
+namespace csw {
+struct TakeScores;
+}
+
 namespace csw::gui {
 
 class LogPanel;
+
+// Where the key recogniser is unsure, per frame of a take (rate_hz, `frames`
+// frames): 1 where the largest posterior of the score set's "shape" or
+// "placement" matrix (every matrix when it has neither) at the frame's row is
+// below `threshold`; 0 elsewhere, and where the scores have no row or no finite
+// value for the frame.
+std::vector<uint8_t> UnsureFrames(const TakeScores& scores, int64_t frames, double rate_hz, double threshold);
 
 // The frame of the local minimum of `speed` (one value per frame, NaN =
 // missing) nearest to `frame` within max_distance frames, the earlier one on a
@@ -126,6 +143,55 @@ class LabelSession : public QObject {
   bool Relabel(long index, const QString& code);
   bool DeleteLabel(long index);
 
+  // Guides (see the top of this file). A tier that is missing gives no guides;
+  // one that cannot be read (bad key codes, wrong kind) gives none and a
+  // warning in the log.
+  static constexpr int64_t kSuggestionToleranceFrames = 2;
+  struct Suggestion {
+    int64_t frame = 0;
+    QString code;
+  };
+  struct ExpectedKeySpan {
+    double start_s = 0.0;
+    double end_s = 0.0;
+    int64_t middle_frame = 0;  // where a jump puts the cursor
+    QString code;
+  };
+  void SetSuggestionTier(const std::string& name);
+  void SetExpectedTier(const std::string& name);
+  const std::string& suggestion_tier() const { return suggestion_tier_; }
+  const std::string& expected_tier() const { return expected_tier_; }
+  const std::vector<Suggestion>& suggestions() const { return suggestions_; }
+  const std::vector<ExpectedKeySpan>& expected_keys() const { return expected_; }
+  // A label of the labelled tier lies within the tolerance of suggestion `index`.
+  bool SuggestionAccepted(size_t index) const;
+  // A label of the labelled tier lies in [start, end) of expected key `index`.
+  bool ExpectedKeyLabelled(size_t index) const;
+  // The frame of the first open suggestion after `frame` (direction > 0) or the
+  // last one before it (direction < 0); -1 when there is none.
+  int64_t NextOpenSuggestion(int64_t frame, int direction) const;
+  // Index of the open suggestion nearest to `frame` within the tolerance, or -1.
+  long OpenSuggestionNear(int64_t frame) const;
+  // Accepts the open suggestion nearest to `frame` within the tolerance: one
+  // undoable AddLabel of its code at its frame. Returns that frame, or -1 (and
+  // a line in the log) when there is none.
+  int64_t AcceptSuggestion(int64_t frame);
+  // The middle frame of the first open expected key whose middle frame is after
+  // `frame` (direction > 0) or the last one before it (direction < 0); -1 when none.
+  int64_t NextOpenExpectedKey(int64_t frame, int direction) const;
+
+  // Frames where the recogniser is unsure (UnsureFrames of the take's stored
+  // score set kUnsureScores, read by the take loader), for take `take`; an
+  // empty vector when the take has none. Kept when the tier changes.
+  static constexpr const char* kUnsureScores = "keys";
+  static constexpr double kUnsurePosterior = 0.6;
+  void SetUnsureFrames(const std::string& take, std::vector<uint8_t> unsure);
+  // The unsure frames of the take labelled (empty when none are known).
+  const std::vector<uint8_t>& unsure_frames() const;
+  // The first frame of the first run of unsure frames starting after `frame`
+  // (direction > 0) or the last one starting before it (direction < 0); -1 when none.
+  int64_t NextUnsureFrame(int64_t frame, int direction) const;
+
   // Autosave.
   void SetAutosaveDelay(int ms) { autosave_timer_.setInterval(ms); }
   void SetRetryDelay(int ms) { retry_timer_.setInterval(ms); }
@@ -148,6 +214,7 @@ class LabelSession : public QObject {
   class Command;
   bool Push(std::unique_ptr<LabelCommand> command);
   void OnChanged();
+  void ReadGuides();
   void Snapshot();
   void StartNextSave();
   void OnSaved(const QString& corpus, const QString& take, long generation, double elapsed_ms);
@@ -164,6 +231,12 @@ class LabelSession : public QObject {
   double rate_hz_ = 0.0;
   int64_t frames_ = 0;
   bool clearing_ = false;
+  std::string suggestion_tier_ = "keys_suggested";
+  std::string expected_tier_ = "expected_keys";
+  std::vector<Suggestion> suggestions_;    // in frame order
+  std::vector<ExpectedKeySpan> expected_;  // in time order
+  std::string unsure_take_;
+  std::vector<uint8_t> unsure_;
 
   // Per (corpus, take): the newest tiers this session produced, and whether
   // they still have to be written.

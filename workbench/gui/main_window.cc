@@ -509,6 +509,8 @@ struct MainWindow::LoadedTake {
   QString remembered_error;             // why it is not usable, "" when fine
   TimeSeriesPanel::Prepared series;     // the plots' audio and first marker lane
   int first_visible = -1;               // FirstVisibleMarker
+  std::vector<uint8_t> unsure;          // UnsureFrames of the stored key scores, empty when none
+  QString scores_error;                 // why the stored key scores are not usable, "" when fine
 };
 
 namespace {
@@ -582,6 +584,13 @@ void MainWindow::StartTakeLoad() {
       } catch (const std::exception& e) {
         out->remembered_error = QString::fromStdString(e.what());
       }
+    }
+    // Where the key recogniser is unsure (label lane, U), from the stored posteriors.
+    try {
+      if (auto scores = corpus.LoadScores(name, LabelSession::kUnsureScores))
+        out->unsure = UnsureFrames(*scores, take->frames(), take->rate_hz, LabelSession::kUnsurePosterior);
+    } catch (const std::exception& e) {
+      out->scores_error = QString::fromStdString(e.what());
     }
     out->take = std::move(take);
     progress.Update("loading take", 1.0);
@@ -671,6 +680,9 @@ void MainWindow::ShowLoadedTake(LoadedTake loaded) {
     browser_->blockSignals(false);
   }
   SetLabelTier(label_tier_combo_->currentText());
+  labels_->SetUnsureFrames(take_->name, std::move(loaded.unsure));
+  if (!loaded.scores_error.isEmpty())
+    log_->Warning(tr("Key scores of %1 not usable for the label lane: %2").arg(name, loaded.scores_error));
   UpdateTitle();
   OnFrameChanged(playback_->frame());
   if (seek_frame_ >= 0 && seek_take_ == name) {
