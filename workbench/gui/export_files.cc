@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "analysis/keys/key_model.h"
 #include "core/error.h"
 #include "core/file_util.h"
 #include "io/dictionary/dictionary_file.h"
@@ -52,7 +53,7 @@ void WriteReplacing(const std::string& path, Write write) {
   }
 }
 
-json ClassesJson(const GaussianClassifier& g) {
+json ClassesJson(const keys::GaussianClassifier& g) {
   json a = json::array();
   for (const auto& c : g.classes()) a.push_back({{"label", c.label}, {"count", c.count}});
   return a;
@@ -148,7 +149,7 @@ FileSummary SummariseModelFile(const std::string& path) {
   const ModelFile mf = LoadModelFile(path);
   const bool models = facts.value("model_count", 0) > 0;
   if (mf.keys) {
-    const KeyModel& k = *mf.keys;
+    const keys::KeyModel& k = *mf.keys;
     json keys = {{"shape_classes", ClassesJson(k.shape)},   {"placement_classes", ClassesJson(k.placement)},
                  {"training_takes", k.info.training_takes}, {"training_frames", k.info.training_frames},
                  {"created_utc", k.info.created_utc},       {"csw_version", k.info.csw_version}};

@@ -85,16 +85,17 @@ const json* Summary(const json& phasing, int method, int type, int component) {
 std::vector<PhasingKeyTimes> ReadPhasingCsv(const std::string& path) {
   std::istringstream in(ReadTextFile(path));
   std::string line;
-  if (!std::getline(in, line)) throw ParseError(path + ": empty file, expected csw phasing's CSV");
+  if (!std::getline(in, line))
+    throw ParseError({path, std::nullopt, std::nullopt}, "empty file, expected csw phasing's CSV");
   const std::vector<std::string> header = SplitCsv(line);
   std::map<std::string, size_t> column;
   for (size_t i = 0; i < header.size(); ++i) column[header[i]] = i;
-  if (!column.count("type")) throw ParseError(path + ": line 1: no column 'type' (not csw phasing's CSV)");
+  if (!column.count("type")) throw ParseError({path, std::nullopt, 1}, "no column 'type' (not csw phasing's CSV)");
   std::array<std::array<size_t, 4>, 2> index{};
   for (int m = 0; m < 2; ++m)
     for (int c = 0; c < 4; ++c) {
       const std::string name = std::string(kMethods[m]) + "_" + kCsvComponents[c] + "_rel_a1_ms";
-      if (!column.count(name)) throw ParseError(path + ": line 1: no column '" + name + "'");
+      if (!column.count(name)) throw ParseError({path, std::nullopt, 1}, "no column '" + name + "'");
       index[m][c] = column[name];
     }
   std::vector<PhasingKeyTimes> keys;
@@ -104,8 +105,8 @@ std::vector<PhasingKeyTimes> ReadPhasingCsv(const std::string& path) {
     if (line.empty() || line == "\r") continue;
     const std::vector<std::string> f = SplitCsv(line);
     if (f.size() != header.size())
-      throw ParseError(path + ": line " + std::to_string(number) + ": " + std::to_string(f.size()) + " fields, " +
-                       std::to_string(header.size()) + " expected");
+      throw ParseError({path, std::nullopt, number},
+                       std::to_string(f.size()) + " fields, " + std::to_string(header.size()) + " expected");
     PhasingKeyTimes k;
     k.type = f[column["type"]];
     for (int m = 0; m < 2; ++m)
@@ -120,7 +121,7 @@ std::vector<PhasingKeyTimes> ReadPhasingCsv(const std::string& path) {
           k.rel_ms[m][c] = std::stod(v, &used);
           if (used != v.size()) throw std::invalid_argument(v);
         } catch (const std::exception&) {
-          throw ParseError(path + ": line " + std::to_string(number) + ": '" + v + "' is not a number");
+          throw ParseError({path, std::nullopt, number}, "'" + v + "' is not a number");
         }
       }
     keys.push_back(k);
