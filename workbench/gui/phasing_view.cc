@@ -433,7 +433,7 @@ void PhasingView::DrawPhasing() {
         }
         bars->setData(keys, values, true);
       }
-      y->setRange(0, top * 1.25);
+      y->setRange(0, top * 1.9);  // room for the caption above the bars
       QString caption = QStringLiteral("%1 %2").arg(kTypes[t], kComponents[c]);
       if (const json* s = Summary(data_.phasing, method_, t, c); s && s->value("count", 0) > 0) {
         const double mean = s->value("mean_ms", 0.0);
@@ -448,7 +448,7 @@ void PhasingView::DrawPhasing() {
           auto* band = new QCPItemRect(p);
           band->setClipAxisRect(rect);
           for (QCPItemPosition* pos : {band->topLeft, band->bottomRight}) pos->setAxes(x, y);
-          band->topLeft->setCoords(mean - ci, top * 1.25);
+          band->topLeft->setCoords(mean - ci, top * 1.9);
           band->bottomRight->setCoords(mean + ci, 0);
           band->setPen(Qt::NoPen);
           band->setBrush(QColor(0, 0, 0, 30));

@@ -199,8 +199,8 @@ void ScoreLanes::BuildTierLane() {
   small.setPointSizeF(std::max(6.0, small.pointSizeF() * 0.8));
   p->yAxis->setRange(0.0, 2.0);
   auto ticker = QSharedPointer<QCPAxisTickerText>::create();
-  ticker->addTick(1.5, decoded_name_.isEmpty() ? tr("decoded") : decoded_name_);
-  ticker->addTick(0.5, expected_name_.isEmpty() ? tr("expected") : expected_name_);
+  ticker->addTick(1.5, tr("decoded"));
+  ticker->addTick(0.5, tr("expected"));
   p->yAxis->setTicker(ticker);
   p->yAxis->setTickLabelFont(small);
   p->yAxis->setSubTicks(false);
@@ -234,6 +234,9 @@ void ScoreLanes::BuildTierLane() {
       text->setClipToAxisRect(true);
     }
   };
+  p->setToolTip(tr("decoded: tier %1; expected: tier %2")
+                    .arg(decoded_name_.isEmpty() ? tr("(none)") : decoded_name_,
+                         expected_name_.isEmpty() ? tr("(none)") : expected_name_));
   draw(decoded_, 1.0, QColor(120, 170, 230, 110));
   draw(expected_, 0.0, QColor(240, 180, 90, 110));
   p->replot(QCustomPlot::rpQueuedReplot);

@@ -342,7 +342,7 @@ QStringList RunTour(const TourOptions& options) {
     window.resizeDocks({window.plots_dock()}, {640}, Qt::Vertical);
     window.plots()->SetTimeRange(key_s - 1.2, key_s + 1.2);
     window.playback()->Seek(static_cast<int64_t>(key_s * window.take()->rate_hz));
-    written << Shot(window.plots_dock(), options.out_dir, QStringLiteral("gestural-score.png"));
+    written << Shot(window.score_lanes(), options.out_dir, QStringLiteral("gestural-score.png"));
 
     PhasingView* view = window.phasing_view();
     QString outcome;
@@ -358,7 +358,8 @@ QStringList RunTour(const TourOptions& options) {
     if (outcome != QStringLiteral("succeeded"))
       throw Error("tour: the phasing analysis " + outcome.toStdString() + ": " +
                   view->status_label()->text().toStdString());
-    window.resizeDocks({window.phasing_dock()}, {900}, Qt::Horizontal);
+    window.phasing_dock()->setFloating(true);
+    window.phasing_dock()->resize(1100, 720);
     view->tabs()->setCurrentIndex(0);
     written << Shot(window.phasing_dock(), options.out_dir, QStringLiteral("phasing-view.png"));
     view->tabs()->setCurrentIndex(1);
