@@ -27,6 +27,7 @@
 #include "core/progress.h"
 #include "datasets/virtual_cuer.h"
 #include "io/corpus/corpus.h"
+#include "io/dictionary/dictionary_file.h"
 #include "io/formats/eaf.h"
 #include "io/formats/textgrid.h"
 #include "tests/gui/take_wait.h"
@@ -328,6 +329,50 @@ TEST_F(ViewsTest, ExportedModelFileIsCopiedWithASummaryOfItsContents) {
   ASSERT_TRUE(finished.wait(30000));
   EXPECT_FALSE(finished.at(1).at(0).toBool());
   EXPECT_FALSE(fs::exists(wrong));
+}
+
+// A dictionary file exported the same way: its summary counts its units and
+// names what it was built from.
+TEST_F(ViewsTest, ExportedDictionaryFileSummaryNamesItsUnits) {
+  dict::Dictionary d;
+  d.models_fingerprint = std::string(64, 'b');
+  d.corpus = "corpus.h5";
+  d.models_file = "models.h5";
+  d.keys_file = "keys.h5";
+  d.key_tier = "keys_aligned";
+  d.hand_parameter_names = {"h1", "h2"};
+  for (int i = 0; i < 2; ++i) {
+    dict::DikeyUnit u;
+    u.take = "s" + std::to_string(i);
+    u.index = i;
+    u.from = KeyCode{1, 2 + i};
+    u.to = KeyCode{3, 4};
+    u.start_s = 0.5 + i;
+    u.end_s = 0.8 + i;
+    u.first_frame = 60 + 120 * i;
+    u.rate_hz = 120;
+    u.phasing_s = -0.05;
+    u.hand_params = Eigen::MatrixXd::Constant(3, 2, 1.0 + i);
+    u.forearm_in_head = Eigen::MatrixXd::Zero(3, 6);
+    u.head_pose = Eigen::MatrixXd::Zero(3, 6);
+    d.dikeys.push_back(u);
+  }
+  const fs::path source = *dir_ / "dict.h5";
+  SaveDictionaryFile(source.string(), d);
+  auto w = OpenWindow();
+  const fs::path copy = *dir_ / "exported-dict.h5";
+  QSignalSpy finished(w->exporter(), &ExportRunner::Finished);
+  ASSERT_TRUE(w->ExportModelFile(QString::fromStdString(source.string()), QString::fromStdString(copy.string())));
+  ASSERT_TRUE(finished.wait(30000));
+  ASSERT_TRUE(finished.at(0).at(0).toBool()) << finished.at(0).at(2).toString().toStdString();
+  EXPECT_EQ(FileBytes(copy), FileBytes(source));
+  const FileSummary& s = w->exporter()->summary();
+  EXPECT_EQ(s.kind, "dictionary");
+  EXPECT_EQ(s.facts["dikey_units"], 2);
+  EXPECT_EQ(s.facts["diphone_units"], 0);
+  EXPECT_EQ(s.facts["hand_parameters"], 2);
+  EXPECT_NE(s.text.find("dikey units: 2 (2 hand parameters)"), std::string::npos) << s.text;
+  EXPECT_NE(s.text.find("key recogniser: keys.h5 (tier keys_aligned)"), std::string::npos) << s.text;
 }
 
 // Models > Phasing and Confusion run on the corpus with the key recogniser:
