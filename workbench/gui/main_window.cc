@@ -7,6 +7,7 @@
 #include <QComboBox>
 #include <QDialog>
 #include <QDialogButtonBox>
+#include <QDir>
 #include <QDockWidget>
 #include <QFileDialog>
 #include <QFileInfo>
@@ -26,10 +27,12 @@
 #include <QVBoxLayout>
 #include <cmath>
 #include <cstdio>
+#include <string_view>
 
 #include "core/error.h"
 #include "workbench/gui/corpus_browser.h"
 #include "workbench/gui/error_inspector.h"
+#include "workbench/gui/export_files.h"
 #include "workbench/gui/figure_export.h"
 #include "workbench/gui/fit_dialog.h"
 #include "workbench/gui/import_runner.h"
@@ -40,7 +43,9 @@
 #include "workbench/gui/label_session.h"
 #include "workbench/gui/log_panel.h"
 #include "workbench/gui/marker_view.h"
+#include "workbench/gui/phasing_view.h"
 #include "workbench/gui/playback.h"
+#include "workbench/gui/score_lanes.h"
 #include "workbench/gui/timeseries_panel.h"
 
 namespace csw::gui {
@@ -120,6 +125,9 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   label_lane_ = new LabelLane(labels_, plots_box);
   label_lane_->AlignWith(plots_->plot());
   plots_layout->addWidget(label_lane_);
+  score_lanes_ = new ScoreLanes(plots_box);  // shown when the take has a gestural score
+  score_lanes_->AlignWith(plots_->plot());
+  plots_layout->addWidget(score_lanes_);
   plots_dock_ = new QDockWidget(tr("Time series"), this);
   plots_dock_->setObjectName("plotsDock");
   plots_dock_->setWidget(plots_box);
@@ -159,6 +167,14 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   connect(this, &MainWindow::TakeShown, this, [this] {
     if (!error_inspector_->results().empty()) error_inspector_->ReconstructTake(take_);
   });
+
+  phasing_view_ = new PhasingView(log_, this);
+  phasing_dock_ = new QDockWidget(tr("Phasing and confusion"), this);
+  phasing_dock_->setObjectName("phasingDock");
+  phasing_dock_->setWidget(phasing_view_);
+  addDockWidget(Qt::RightDockWidgetArea, phasing_dock_);
+  phasing_dock_->hide();
+  exporter_ = new ExportRunner(log_, this, this);
 
   playback_ = new Playback(this);
   import_runner_ = new ImportRunner(this);
@@ -207,6 +223,8 @@ MainWindow::MainWindow(const QString& settings_path, QWidget* parent) : QMainWin
   connect(quantity_combo_, qOverload<int>(&QComboBox::activated), this, [this](int) { OnMarkerSeriesChosen(); });
   connect(show_all, &QToolButton::clicked, plots_, &TimeSeriesPanel::ShowAll);
   connect(plots_, &TimeSeriesPanel::TimeRangeChanged, label_lane_, &LabelLane::SetTimeRange);
+  connect(plots_, &TimeSeriesPanel::TimeRangeChanged, score_lanes_, &ScoreLanes::SetTimeRange);
+  connect(score_lanes_, &ScoreLanes::TimeClicked, playback_, &Playback::SeekTime);
   connect(label_lane_, &LabelLane::SeekRequested, playback_, &Playback::Seek);
   connect(label_lane_, &LabelLane::SnapRequested, this, [this] { SnapLabelToSpeedMinimum(); });
   connect(label_tier_combo_, qOverload<int>(&QComboBox::activated), this,
@@ -272,6 +290,17 @@ void MainWindow::BuildMenus() {
   file->addAction(tr("&Export Plot Figure…"), QKeySequence(Qt::CTRL | Qt::Key_E), this,
                   &MainWindow::ChooseAndExportPlot);
   file->addAction(tr("Export &3D View Figure…"), this, &MainWindow::ChooseAndExport3d);
+  QMenu* export_menu = file->addMenu(tr("E&xport"));
+  export_menu->setObjectName("exportMenu");
+  export_menu->addAction(tr("Label Tiers as &TextGrid…"), this,
+                         [this] { ChooseAndExportLabels(QStringLiteral("TextGrid")); });
+  export_menu->addAction(tr("Label Tiers as &EAF…"), this, [this] { ChooseAndExportLabels(QStringLiteral("eaf")); });
+  export_menu->addAction(tr("&Models, Key Recogniser or Dictionary File…"), this,
+                         &MainWindow::ChooseAndExportModelFile);
+  export_menu->addSeparator();
+  export_menu->addAction(tr("&Shape Posterior Lane…"), this, [this] { ChooseAndExportScoreLane(0); });
+  export_menu->addAction(tr("&Placement Posterior Lane…"), this, [this] { ChooseAndExportScoreLane(1); });
+  export_menu->addAction(tr("&Key Tiers Lane…"), this, [this] { ChooseAndExportScoreLane(2); });
   file->addSeparator();
   file->addAction(tr("&Quit"), QKeySequence::Quit, this, &QWidget::close);
   UpdateRecentMenu();
@@ -290,6 +319,7 @@ void MainWindow::BuildMenus() {
   models->addAction(tr("&Fit Model…"), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_F), this,
                     [this] { ShowFitDialog(); });
   models->addAction(tr("&Inspect Reconstruction Errors…"), this, &MainWindow::ChooseAndInspectErrors);
+  models->addAction(tr("&Phasing and Confusion…"), this, [this] { ShowPhasing(); });
 
   QMenu* analysis = menuBar()->addMenu(tr("&Analysis"));
   for (const JobSpec& spec : AnalysisJobs()) {
@@ -300,6 +330,7 @@ void MainWindow::BuildMenus() {
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(takes_dock_->toggleViewAction());
   view->addAction(errors_dock_->toggleViewAction());
+  view->addAction(phasing_dock_->toggleViewAction());
   view->addAction(plots_dock_->toggleViewAction());
   view->addAction(log_dock_->toggleViewAction());
   view->addAction(counts_dock_->toggleViewAction());
@@ -381,6 +412,7 @@ void MainWindow::closeEvent(QCloseEvent* event) {
   if (fit_dialog_ != nullptr) fit_dialog_->CancelFit();
   for (auto& [id, dialog] : job_dialogs_) dialog->Cancel();
   error_inspector_->Cancel();
+  phasing_view_->Cancel();
   SaveLayout();
   event->accept();
 }
@@ -489,9 +521,11 @@ void MainWindow::ShowOpenedCorpus(const QString& path, OpenedCorpus opened, cons
   labels_->SetTake(std::string(), nullptr, label_tier_combo_->currentText().toStdString());
   marker_view_->SetTake(nullptr);
   plots_->SetTake(nullptr);
+  score_lanes_->SetTake(std::nullopt, {}, 0.0);
   playback_->SetTake(0, 0, nullptr);
   marker_combo_->clear();
   browser_->SetTakes(takes);
+  phasing_view_->SetCorpus(corpus_path());
   AddRecent(path);
   log_->Info(tr("Opened %1 (%n take(s))", nullptr, static_cast<int>(takes.size())).arg(path));
   UpdateTitle();
@@ -509,8 +543,9 @@ struct MainWindow::LoadedTake {
   QString remembered_error;             // why it is not usable, "" when fine
   TimeSeriesPanel::Prepared series;     // the plots' audio and first marker lane
   int first_visible = -1;               // FirstVisibleMarker
-  std::vector<uint8_t> unsure;          // UnsureFrames of the stored key scores, empty when none
-  QString scores_error;                 // why the stored key scores are not usable, "" when fine
+  std::optional<TakeScores> scores;     // the take's gestural score (ScoreLanes::kScoreSet)
+  std::vector<uint8_t> unsure;          // UnsureFrames of those scores, empty when none
+  QString scores_error;                 // why they could not be read or used, "" when fine
 };
 
 namespace {
@@ -585,10 +620,12 @@ void MainWindow::StartTakeLoad() {
         out->remembered_error = QString::fromStdString(e.what());
       }
     }
-    // Where the key recogniser is unsure (label lane, U), from the stored posteriors.
+    // The gestural score (score lanes) and where the key recogniser is unsure (label lane, U).
+    static_assert(std::string_view(ScoreLanes::kScoreSet) == LabelSession::kUnsureScores);
     try {
-      if (auto scores = corpus.LoadScores(name, LabelSession::kUnsureScores))
-        out->unsure = UnsureFrames(*scores, take->frames(), take->rate_hz, LabelSession::kUnsurePosterior);
+      out->scores = corpus.LoadScores(name, ScoreLanes::kScoreSet);
+      if (out->scores)
+        out->unsure = UnsureFrames(*out->scores, take->frames(), take->rate_hz, LabelSession::kUnsurePosterior);
     } catch (const std::exception& e) {
       out->scores_error = QString::fromStdString(e.what());
     }
@@ -663,6 +700,9 @@ void MainWindow::ShowLoadedTake(LoadedTake loaded) {
   }
   plots_->SetHiddenTier(label_tier_combo_->currentText().trimmed());  // drawn by the label lane instead
   plots_->SetTake(take_, std::move(loaded.series));
+  if (!loaded.scores_error.isEmpty())
+    log_->Warning(tr("Gestural score of %1 not shown: %2").arg(name, loaded.scores_error));
+  score_lanes_->SetTake(std::move(loaded.scores), take_->tiers, plots_->view_end());
   playback_->SetTake(take_->frames(), take_->rate_hz, &take_->audio);  // rewinds to frame 0
   marker_combo_->clear();
   marker_combo_->addItem(tr("(none)"), -1);
@@ -681,8 +721,6 @@ void MainWindow::ShowLoadedTake(LoadedTake loaded) {
   }
   SetLabelTier(label_tier_combo_->currentText());
   labels_->SetUnsureFrames(take_->name, std::move(loaded.unsure));
-  if (!loaded.scores_error.isEmpty())
-    log_->Warning(tr("Key scores of %1 not usable for the label lane: %2").arg(name, loaded.scores_error));
   UpdateTitle();
   OnFrameChanged(playback_->frame());
   if (seek_frame_ >= 0 && seek_take_ == name) {
@@ -723,6 +761,7 @@ bool MainWindow::SetLabelTier(const QString& tier) {
     plots_->SetMarkerSeries(marker, quantity);
     plots_->SetTimeRange(t0, t1);
     plots_->SetCursorTime(playback_->time_s());
+    score_lanes_->SetTiers(take_->tiers);
   }
   label_lane_->SetTimeRange(plots_->view_start(), plots_->view_end());
   label_lane_->SetCursorFrame(playback_->frame());
@@ -787,6 +826,7 @@ void MainWindow::OnFrameChanged(qint64 frame) {
   if (take_ && take_->rate_hz > 0) {
     double t = static_cast<double>(frame) / take_->rate_hz;
     plots_->SetCursorTime(t);
+    score_lanes_->SetCursorTime(t);
     frame_label_->setText(tr("frame %1  t = %2 s").arg(frame + take_->first_frame).arg(t, 0, 'f', 3));
   } else {
     frame_label_->setText(tr("no take"));
@@ -957,6 +997,80 @@ void MainWindow::OnUtteranceChosen(const QString& take, qint64 frame) {
   seek_frame_ = -1;
   playback_->Seek(frame);
   log_->Info(tr("%1: worst frame %2").arg(take).arg(frame + take_->first_frame));
+}
+
+bool MainWindow::ShowPhasing(const QString& keys_file) {
+  phasing_view_->SetCorpus(corpus_path());
+  phasing_dock_->show();
+  phasing_dock_->raise();
+  if (keys_file.isEmpty()) return true;
+  if (!corpus_) {
+    log_->Error(tr("Open a corpus before running the phasing analysis."));
+    return false;
+  }
+  return phasing_view_->Run(corpus_path(), keys_file);
+}
+
+bool MainWindow::ExportLabels(const QString& path) {
+  if (!take_) {
+    log_->Error(tr("No take shown: no labels to export."));
+    return false;
+  }
+  std::vector<LabelTier> tiers = TiersToExport(*take_, labels_, corpus_ ? corpus_->path() : std::string());
+  double end = take_->duration_s();
+  for (const LabelTier& t : tiers) end = std::max(end, t.end_s);
+  if (!exporter_->ExportLabels(path, std::move(tiers), 0.0, end)) {
+    log_->Warning(tr("An export is already running."));
+    return false;
+  }
+  return true;
+}
+
+bool MainWindow::ExportModelFile(const QString& source, const QString& destination) {
+  if (!exporter_->ExportModelFile(source, destination)) {
+    log_->Warning(tr("An export is already running."));
+    return false;
+  }
+  return true;
+}
+
+void MainWindow::ChooseAndExportLabels(const QString& extension) {
+  if (!take_) {
+    log_->Error(tr("No take shown: no labels to export."));
+    return;
+  }
+  const QString start =
+      QDir(settings_->value("lastDir").toString()).filePath(QString::fromStdString(take_->name) + "." + extension);
+  const QString filter =
+      extension == QStringLiteral("eaf") ? tr("ELAN annotation (*.eaf)") : tr("Praat TextGrid (*.TextGrid)");
+  const QString path = QFileDialog::getSaveFileName(this, tr("Export Label Tiers"), start, filter);
+  if (!path.isEmpty()) ExportLabels(path);
+}
+
+void MainWindow::ChooseAndExportModelFile() {
+  QString start = settings_->value("lastModelFile").toString();
+  if (start.isEmpty()) start = settings_->value("lastDir").toString();
+  const QString source = QFileDialog::getOpenFileName(this, tr("Export a Models, Key Recogniser or Dictionary File"),
+                                                      start, tr("csw HDF5 file (*.h5);;All files (*)"));
+  if (source.isEmpty()) return;
+  const QString destination = QFileDialog::getSaveFileName(this, tr("Export To"), source, tr("csw HDF5 file (*.h5)"));
+  if (!destination.isEmpty()) ExportModelFile(source, destination);
+}
+
+void MainWindow::ChooseAndExportScoreLane(int lane) {
+  if (!score_lanes_->has_scores()) {
+    log_->Error(tr("The shown take has no gestural score (csw keys score writes it)."));
+    return;
+  }
+  const QString path = QFileDialog::getSaveFileName(this, tr("Export Score Lane Figure"),
+                                                    settings_->value("lastDir").toString(), kFigureFilter);
+  if (path.isEmpty()) return;
+  try {
+    score_lanes_->ExportLane(lane, path);
+    log_->Info(tr("Figure saved to %1").arg(path));
+  } catch (const std::exception& e) {
+    log_->Error(tr("Figure not saved: %1").arg(QString::fromStdString(e.what())));
+  }
 }
 
 void MainWindow::ShowImportDialog() {

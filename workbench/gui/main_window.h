@@ -24,6 +24,7 @@ namespace csw::gui {
 
 class CorpusBrowser;
 class ErrorInspector;
+class ExportRunner;
 class FitDialog;
 class JobDialog;
 class ImportRunner;
@@ -33,7 +34,9 @@ class LabelLane;
 class LabelSession;
 class LogPanel;
 class MarkerView;
+class PhasingView;
 class Playback;
+class ScoreLanes;
 class TimeSeriesPanel;
 
 class MainWindow : public QMainWindow {
@@ -101,6 +104,17 @@ class MainWindow : public QMainWindow {
   // generated fill versions.
   bool InspectErrors(const QString& model_file, const QStringList& takes = {});
 
+  // Gestural score and phasing views, export (issue 16, items 4 and 6).
+  // Shows the phasing and confusion dock; with a key-recogniser file, runs
+  // csw keys score (dry run) and csw phasing on the open corpus in it.
+  bool ShowPhasing(const QString& keys_file = QString());
+  // Writes the shown take's label tiers (unsaved label edits included) to a
+  // .TextGrid or .eaf file on a worker; false when none is shown or an export runs.
+  bool ExportLabels(const QString& path);
+  // Copies a models / key-recogniser / dictionary file to `destination` on a
+  // worker and shows a summary of what it holds.
+  bool ExportModelFile(const QString& source, const QString& destination);
+
   QString corpus_path() const;
   std::shared_ptr<const Take> take() const { return take_; }
   QStringList recent_files() const;
@@ -127,6 +141,10 @@ class MainWindow : public QMainWindow {
   FitDialog* fit_dialog() const { return fit_dialog_; }
   ErrorInspector* error_inspector() const { return error_inspector_; }
   QDockWidget* errors_dock() const { return errors_dock_; }
+  ScoreLanes* score_lanes() const { return score_lanes_; }
+  PhasingView* phasing_view() const { return phasing_view_; }
+  QDockWidget* phasing_dock() const { return phasing_dock_; }
+  ExportRunner* exporter() const { return exporter_; }
 
  signals:
   void CorpusOpened(const QString& path);
@@ -153,6 +171,9 @@ class MainWindow : public QMainWindow {
   void ChooseAndExport3d();
   void ChooseMarkerSet();
   void ChooseAndInspectErrors();
+  void ChooseAndExportLabels(const QString& extension);
+  void ChooseAndExportModelFile();
+  void ChooseAndExportScoreLane(int lane);
   void OnUtteranceChosen(const QString& take, qint64 frame);
   void UpdateTitle();
   void StartTakeLoad();
@@ -192,6 +213,10 @@ class MainWindow : public QMainWindow {
   std::map<QString, JobDialog*> job_dialogs_;
   ErrorInspector* error_inspector_ = nullptr;
   QDockWidget* errors_dock_ = nullptr;
+  ScoreLanes* score_lanes_ = nullptr;
+  PhasingView* phasing_view_ = nullptr;
+  QDockWidget* phasing_dock_ = nullptr;
+  ExportRunner* exporter_ = nullptr;
   QMenu* recent_menu_ = nullptr;
   QLabel* frame_label_ = nullptr;
   QAction* play_action_ = nullptr;

@@ -8,6 +8,7 @@
 #include <QEventLoop>
 #include <QFile>
 #include <QLabel>
+#include <QTabWidget>
 #include <QTimer>
 #include <atomic>
 #include <fstream>
@@ -28,8 +29,11 @@
 #include "workbench/gui/log_panel.h"
 #include "workbench/gui/main_window.h"
 #include "workbench/gui/marker_view.h"
+#include "workbench/gui/phasing_view.h"
 #include "workbench/gui/playback.h"
+#include "workbench/gui/score_lanes.h"
 #include "workbench/gui/timeseries_panel.h"
+#include "workbench/jobs/keys_job.h"
 
 namespace csw::gui {
 
@@ -333,6 +337,63 @@ QStringList RunTour(const TourOptions& options) {
     Settle(300);
     written << Shot(suggest, options.out_dir, QStringLiteral("analysis-job.png"));
     suggest->hide();
+  }
+
+  // 9. The gestural score and the phasing and confusion views: a key
+  // recogniser trained on the virtual cuer's takes and scored on them (as
+  // `csw keys train` and `csw keys score` do), then Models > Phasing and
+  // Confusion run in the background on the corpus with it.
+  {
+    QStringList takes{QString::fromStdString(demo.name)};
+    for (const QString& t : imported)
+      if (t.startsWith(QStringLiteral("sentence_"))) takes << t;
+    const QString keys = QDir(options.work_dir).filePath("demo.keys.h5");
+    QFile::remove(keys);
+    Progress quiet;
+    jobs::KeysTrainOptions train;
+    train.corpus = corpus.toStdString();
+    for (const QString& t : takes) train.takes.push_back(t.toStdString());
+    train.markerset = set_path.toStdString();
+    train.output = keys.toStdString();
+    jobs::KeysTrain(train, quiet);
+    jobs::KeysScoreOptions score;
+    score.corpus = corpus.toStdString();
+    score.keys = keys.toStdString();
+    score.takes = train.takes;
+    score.markerset = set_path.toStdString();
+    jobs::KeysScore(score, quiet);
+    window.LoadMarkerSetFile(set_path);
+    if (!window.OpenCorpus(corpus)) throw Error("tour: cannot reopen the demo corpus");
+    WaitForTake(window);
+    window.browser()->SelectTake(QString::fromStdString(demo.name));
+    WaitForTake(window);
+    if (!window.score_lanes()->has_scores()) throw Error("tour: the demo take shows no gestural score");
+    window.resizeDocks({window.plots_dock()}, {640}, Qt::Vertical);
+    window.plots()->SetTimeRange(key_s - 1.2, key_s + 1.2);
+    window.playback()->Seek(static_cast<int64_t>(key_s * window.take()->rate_hz));
+    written << Shot(window.score_lanes(), options.out_dir, QStringLiteral("gestural-score.png"));
+
+    PhasingView* view = window.phasing_view();
+    QString outcome;
+    QEventLoop loop;
+    auto finished = QObject::connect(view, &PhasingView::Finished, &loop, [&](const QString& o) {
+      outcome = o;
+      loop.quit();
+    });
+    window.errors_dock()->hide();
+    if (!window.ShowPhasing(keys)) throw Error("tour: the phasing analysis did not start");
+    loop.exec();
+    QObject::disconnect(finished);
+    if (outcome != QStringLiteral("succeeded"))
+      throw Error("tour: the phasing analysis " + outcome.toStdString() + ": " +
+                  view->status_label()->text().toStdString());
+    window.phasing_dock()->setFloating(true);
+    window.phasing_dock()->resize(1100, 720);
+    view->tabs()->setCurrentIndex(0);
+    written << Shot(window.phasing_dock(), options.out_dir, QStringLiteral("phasing-view.png"));
+    view->tabs()->setCurrentIndex(1);
+    written << Shot(window.phasing_dock(), options.out_dir, QStringLiteral("confusion-view.png"));
+    window.phasing_dock()->hide();
   }
 
   window.close();
