@@ -22,6 +22,7 @@
 #include <QPushButton>
 #include <QSettings>
 #include <QStatusBar>
+#include <QThreadPool>
 #include <QToolButton>
 #include <QUndoStack>
 #include <QVBoxLayout>
@@ -53,6 +54,13 @@ namespace csw::gui {
 namespace {
 constexpr int kMaxRecent = 8;
 const char* kFigureFilter = "PNG image (*.png);;SVG drawing (*.svg);;PDF document (*.pdf)";
+
+// Drops `take` on a pool thread when that is its last holder: freeing a long
+// take (a 10-minute one holds ~170 MB) costs the GUI thread tens of ms.
+void ReleaseOffTheGuiThread(std::shared_ptr<const Take> take) {
+  if (!take) return;
+  QThreadPool::globalInstance()->start([take = std::move(take)]() mutable { take.reset(); });
+}
 
 bool SameTiers(const std::vector<LabelTier>& a, const std::vector<LabelTier>& b) {
   if (a.size() != b.size()) return false;
@@ -508,7 +516,7 @@ void MainWindow::OnCorpusOpenEnded(bool ok, const QString& message) {
 void MainWindow::ShowOpenedCorpus(const QString& path, OpenedCorpus opened, const QString& select) {
   const std::vector<TakeSummary>& takes = opened.takes;
   corpus_ = std::move(opened.corpus);
-  take_.reset();
+  std::shared_ptr<const Take> previous = std::move(take_);
   // A take still loading from the corpus shown before ends unseen.
   if (!wanted_take_.isEmpty()) {
     wanted_take_.clear();
@@ -528,6 +536,7 @@ void MainWindow::ShowOpenedCorpus(const QString& path, OpenedCorpus opened, cons
   phasing_view_->SetCorpus(corpus_path());
   AddRecent(path);
   log_->Info(tr("Opened %1 (%n take(s))", nullptr, static_cast<int>(takes.size())).arg(path));
+  ReleaseOffTheGuiThread(std::move(previous));  // the views hold it no more
   UpdateTitle();
   if (takes.empty()) return;
   QString first = QString::fromStdString(takes.front().name);
@@ -686,6 +695,7 @@ void MainWindow::ShowLoadedTake(LoadedTake loaded) {
     take = std::move(copy);
   }
   playback_->Pause();
+  std::shared_ptr<const Take> previous = std::move(take_);
   take_ = take;
   // A marker set loaded by the user wins; otherwise the one the take was
   // imported with (the corpus remembers it), so sticks and frames show at once.
@@ -721,6 +731,7 @@ void MainWindow::ShowLoadedTake(LoadedTake loaded) {
   }
   SetLabelTier(label_tier_combo_->currentText());
   labels_->SetUnsureFrames(take_->name, std::move(loaded.unsure));
+  ReleaseOffTheGuiThread(std::move(previous));  // the views hold it no more
   UpdateTitle();
   OnFrameChanged(playback_->frame());
   if (seek_frame_ >= 0 && seek_take_ == name) {

@@ -172,7 +172,7 @@ void ScoreLanes::BuildPosteriorLane(int lane, const ScoreMatrix* matrix, const Q
         data[r].value = matrix->values[static_cast<size_t>(r) * static_cast<size_t>(cols) + static_cast<size_t>(c)];
       }
       g->data()->set(data, /*alreadySorted=*/true);
-      g->setPen(QPen(ClassColor(c, cols), c == 0 ? 1.0 : 1.4));
+      g->setPen(QPen(ClassColor(c, cols), 1.0));  // wider pens are stroked: slow on long takes
       const QString name = static_cast<size_t>(c) < matrix->column_names.size()
                                ? QString::fromStdString(matrix->column_names[static_cast<size_t>(c)])
                                : QString::number(c);
