@@ -55,6 +55,15 @@ JobField Save(const char* key, const QString& label, const QString& help, bool r
   return {QString::fromLatin1(key), label, JobField::Kind::kSaveFile, QString(), help, required};
 }
 
+JobField MarkerSet() {
+  return {QStringLiteral("markerset"),
+          QObject::tr("Marker set (JSON)"),
+          JobField::Kind::kOpenFile,
+          QString(),
+          QObject::tr("Empty = the marker set the corpus remembers for each take (File > Load Marker Set fills it)"),
+          false};
+}
+
 const QString kTakesHelp = QObject::tr(
     "Take names or patterns (take_selection: e.g. s01*, -s01_03), separated by "
     "commas or spaces; empty = every take but generated fill versions");
@@ -79,6 +88,7 @@ jobs::KeysSuggestOptions SuggestOptionsOf(const std::string& corpus, const JobVa
   o.phasing = Str(v, "phasing");
   o.tier = Str(v, "tier");
   o.placement_tier = Str(v, "placement_tier");
+  o.markerset = Str(v, "markerset");
   return o;
 }
 
@@ -89,6 +99,7 @@ jobs::KeysTrainOptions TrainOptionsOf(const std::string& corpus, const JobValues
   o.tier = Str(v, "tier");
   o.placement_tier = Str(v, "placement_tier");
   o.output = Str(v, "output");
+  o.markerset = Str(v, "markerset");
   return o;
 }
 
@@ -100,6 +111,7 @@ jobs::KeysScoreOptions ScoreOptionsOf(const std::string& corpus, const JobValues
   o.tier = Str(v, "tier");
   o.placement_tier = Str(v, "placement_tier");
   o.figures = Str(v, "figures");
+  o.markerset = Str(v, "markerset");
   return o;
 }
 
@@ -112,6 +124,7 @@ jobs::PhasingOptions PhasingOptionsOf(const std::string& corpus, const JobValues
   o.targets = Str(v, "targets");
   o.csv = Str(v, "csv");
   o.figures = Str(v, "figures");
+  o.markerset = Str(v, "markerset");
   return o;
 }
 
@@ -126,6 +139,7 @@ jobs::CleanOptions CleanOptionsOf(const std::string& corpus, const JobValues& v,
   o.filter = Str(v, "filter");
   o.cutoff_hz = Number(v, "cutoff_hz", why);
   o.models = Str(v, "models");
+  o.markerset = Str(v, "markerset");
   return o;
 }
 
@@ -173,7 +187,8 @@ std::vector<JobSpec> MakeJobs() {
                 Open("phasing", QObject::tr("Phasing model (JSON)"), QObject::tr("Empty = Attina's means"), false),
                 Text("tier", QObject::tr("Shape targets tier"), QStringLiteral("keys_suggested"), QString(), true),
                 Text("placement_tier", QObject::tr("Placement targets tier"), QStringLiteral("placement_suggested"),
-                     QString(), true)};
+                     QString(), true),
+                MarkerSet()};
     s.writes_corpus = true;
     s.run = [](const std::string& c, const JobValues& v, Progress& p) {
       return jobs::KeysSuggest(SuggestOptionsOf(c, v), p);
@@ -193,7 +208,7 @@ std::vector<JobSpec> MakeJobs() {
                 Text("tier", QObject::tr("Label tier"), QStringLiteral("keys"), QString(), true),
                 Text("placement_tier", QObject::tr("Placement label tier"), QStringLiteral("placement_targets"),
                      QObject::tr("Used when the take has it")),
-                Save("output", QObject::tr("Model file"), QObject::tr("Created or updated"), true)};
+                Save("output", QObject::tr("Model file"), QObject::tr("Created or updated"), true), MarkerSet()};
     s.run = [](const std::string& c, const JobValues& v, Progress& p) {
       return jobs::KeysTrain(TrainOptionsOf(c, v), p);
     };
@@ -214,7 +229,8 @@ std::vector<JobSpec> MakeJobs() {
         Text("tier", QObject::tr("Label tier"), QStringLiteral("keys"), QString()),
         Text("placement_tier", QObject::tr("Placement label tier"), QStringLiteral("placement_targets"), QString()),
         Text("figures", QObject::tr("Figures folder"), QString(),
-             QObject::tr("Confusion matrices as PNG; empty = none"))};
+             QObject::tr("Confusion matrices as PNG; empty = none")),
+        MarkerSet()};
     s.writes_corpus = true;
     s.run = [](const std::string& c, const JobValues& v, Progress& p) {
       return jobs::KeysScore(ScoreOptionsOf(c, v), p);
@@ -236,7 +252,8 @@ std::vector<JobSpec> MakeJobs() {
         Text("phones", QObject::tr("Phone tier"), QStringLiteral("phones"), QString()),
         Text("targets", QObject::tr("Rough targets"), QStringLiteral("auto"), QObject::tr("labels, aligned or auto")),
         Save("csv", QObject::tr("Per-key CSV"), QObject::tr("Empty = none"), false),
-        Text("figures", QObject::tr("Figures folder"), QString(), QObject::tr("Empty = none"))};
+        Text("figures", QObject::tr("Figures folder"), QString(), QObject::tr("Empty = none")),
+        MarkerSet()};
     s.run = [](const std::string& c, const JobValues& v, Progress& p) {
       return jobs::Phasing(PhasingOptionsOf(c, v), p);
     };
@@ -257,7 +274,8 @@ std::vector<JobSpec> MakeJobs() {
                 Text("max_gap_s", QObject::tr("Longest gap filled (s)"), QStringLiteral("0.5"), QString(), true),
                 Open("models", QObject::tr("Models (model fill)"), QString(), false),
                 Text("filter", QObject::tr("Filter"), QString(), QObject::tr("Empty, butterworth or kalman")),
-                Text("cutoff_hz", QObject::tr("Cut-off (Hz)"), QStringLiteral("15"), QString(), true)};
+                Text("cutoff_hz", QObject::tr("Cut-off (Hz)"), QStringLiteral("15"), QString(), true),
+                MarkerSet()};
     s.writes_corpus = true;
     s.run = [](const std::string& c, const JobValues& v, Progress& p) {
       std::string why;

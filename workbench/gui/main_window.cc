@@ -969,7 +969,14 @@ JobDialog* MainWindow::ShowJobDialog(const QString& id) {
       OpenCorpus(corpus, take_ ? QString::fromStdString(take_->name) : QString());
     });
   }
-  if (!dialog->running()) dialog->SetCorpus(corpus_path());
+  if (!dialog->running()) {
+    dialog->SetCorpus(corpus_path());
+    // The marker set loaded with File > Load Marker Set, for jobs that read one.
+    const QString set = settings_->value("markerSet").toString();
+    if (dialog->field(QStringLiteral("markerset")) != nullptr && dialog->Value(QStringLiteral("markerset")).isEmpty() &&
+        marker_set_ && !set.isEmpty())
+      dialog->SetValue(QStringLiteral("markerset"), set);
+  }
   dialog->show();
   dialog->raise();
   return dialog;

@@ -321,7 +321,9 @@ QStringList RunTour(const TourOptions& options) {
     // dialog with the job's text output, then the corpus reopened on its take.
     JobDialog* suggest = window.ShowJobDialog(QStringLiteral("keys-suggest"));
     if (suggest == nullptr) throw Error("tour: no keys-suggest job");
-    suggest->SetValue(QStringLiteral("takes"), cuer_takes.join(QStringLiteral(", ")));
+    // The imported sentences (the synthetic take has no phone tier); the
+    // marker set is the one loaded with File > Load Marker Set (filled in).
+    suggest->SetValue(QStringLiteral("takes"), cuer_takes.mid(1).join(QStringLiteral(", ")));
     suggest->move(window.geometry().center() - QPoint(suggest->width() / 2, suggest->height() / 2));
     QString job_outcome;
     auto job_finished = QObject::connect(suggest, &JobDialog::JobFinished, &loop, [&](const QString& o) {
@@ -332,7 +334,9 @@ QStringList RunTour(const TourOptions& options) {
       throw Error("tour: keys suggest did not start: " + suggest->status_label()->text().toStdString());
     loop.exec();
     QObject::disconnect(job_finished);
-    if (job_outcome != QStringLiteral("succeeded")) throw Error("tour: keys suggest " + job_outcome.toStdString());
+    if (job_outcome != QStringLiteral("succeeded"))
+      throw Error("tour: keys suggest " + job_outcome.toStdString() + ": " +
+                  suggest->status_label()->text().toStdString());
     WaitForTake(window);
     Settle(300);
     written << Shot(suggest, options.out_dir, QStringLiteral("analysis-job.png"));
