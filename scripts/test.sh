@@ -25,8 +25,11 @@ stamp "build (warnings as errors)"
 cmake -S . -B build/ci -G Ninja -DCSW_WERROR=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build build/ci -j"$jobs"
 stamp "tests"
+# The per-test timeout is a guard against hangs, not a speed check (speed is
+# measured in bench/): the two acceptance runs (phasing over 100 sentences,
+# synthesis of 30) take 250-600 s each on a 2-core VM, depending on the host.
 summary=$(mktemp)
-(cd build/ci && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 600) | tee "$summary"
+(cd build/ci && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 1500) | tee "$summary"
 count_tests() { sed -n 's/.*tests passed, \([0-9]*\) tests failed out of \([0-9]*\).*/\2 \1/p' "$summary" | tail -n 1; }
 read -r total1 failed1 <<<"$(count_tests)"
 
