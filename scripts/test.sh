@@ -56,7 +56,7 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # and phasing) are left out here: under ASan their Eigen-heavy simulations run
 # for over 10 minutes each. Every code path they drive is exercised under the
 # sanitizers by the smaller tests of the same modules (on fewer takes).
-(cd build/asan && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 900 \
+(cd build/asan && QT_QPA_PLATFORM=offscreen ctest --output-on-failure -j"$jobs" --timeout 1800 \
   -E 'Acceptance') | tee "$summary"
 read -r total2 failed2 <<<"$(count_tests)"
 
