@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <string>
 
+#include "core/build_paths.h"
 #include "core/take.h"
 #include "io/c3d/c3d.h"
 #include "workbench/jobs/jobs.h"

@@ -21,6 +21,7 @@
 #include <random>
 
 #include "analysis/keys/key_model.h"
+#include "core/build_paths.h"
 #include "core/progress.h"
 #include "io/corpus/corpus.h"
 #include "workbench/jobs/import_job.h"

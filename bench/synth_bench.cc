@@ -17,6 +17,7 @@
 
 #include <filesystem>
 
+#include "core/build_paths.h"
 #include "core/progress.h"
 #include "io/dictionary/dictionary_file.h"
 #include "io/models/model_file.h"

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "core/error.h"
 
@@ -32,6 +33,24 @@ class GestureFit {
     complete_ = finite_.all();
     count_ = finite_.count();
     x_ = finite_.select(x_, 0.0);
+    // Dimensions sharing one pattern of missing frames (the three coordinates
+    // of a marker, usually) share one normal matrix.
+    if (!complete_) {
+      for (Eigen::Index j = 0; j < x_.cols(); ++j) {
+        auto same = std::find_if(groups_.begin(), groups_.end(), [&](const MaskGroup& g) {
+          return (finite_.col(g.dims.front()) == finite_.col(j)).all();
+        });
+        if (same != groups_.end()) {
+          same->dims.push_back(j);
+          continue;
+        }
+        MaskGroup g;
+        g.dims.push_back(j);
+        for (Eigen::Index f = 0; f < x_.rows(); ++f)
+          if (finite_(f, j)) g.rows.push_back(f);
+        groups_.push_back(std::move(g));
+      }
+    }
   }
 
   int64_t count() const { return count_; }
@@ -81,11 +100,12 @@ class GestureFit {
       g.diagonal().array() += ridge;
       beta = g.ldlt().solve(a.transpose() * x_);
     } else {
-      for (Eigen::Index j = 0; j < d; ++j) {
-        const Eigen::VectorXd w = finite_.col(j).cast<double>();
-        Eigen::MatrixXd g = a.transpose() * w.asDiagonal() * a;
+      for (const MaskGroup& group : groups_) {
+        const Eigen::MatrixXd ag = a(group.rows, Eigen::all);
+        Eigen::MatrixXd g = ag.transpose() * ag;
         g.diagonal().array() += ridge;
-        beta.col(j) = g.ldlt().solve(a.transpose() * x_.col(j));  // x_ is 0 where missing
+        const Eigen::MatrixXd b = g.ldlt().solve(ag.transpose() * x_(group.rows, group.dims));
+        for (size_t i = 0; i < group.dims.size(); ++i) beta.col(group.dims[i]) = b.col(static_cast<Eigen::Index>(i));
       }
     }
     if (residual) {
@@ -119,6 +139,10 @@ class GestureFit {
   Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> finite_;
   bool complete_ = true;
   int64_t count_ = 0;
+  struct MaskGroup {
+    std::vector<Eigen::Index> dims, rows;  // dimensions with one finite pattern, and its finite frames
+  };
+  std::vector<MaskGroup> groups_;
 };
 
 // Box bounds on (onset_k, duration_k), and order: the onsets and the targets of

@@ -19,6 +19,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/build_paths.h"
 #include "core/sha256.h"
 #include "io/c3d/c3d.h"
 #include "io/corpus/corpus.h"

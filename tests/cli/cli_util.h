@@ -8,6 +8,8 @@
 #include <sstream>
 #include <string>
 
+#include "core/build_paths.h"
+
 namespace csw::testing {
 
 struct RunResult {

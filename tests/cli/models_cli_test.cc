@@ -22,6 +22,7 @@
 #include <tuple>
 #include <vector>
 
+#include "core/build_paths.h"
 #include "core/sha256.h"
 #include "io/c3d/c3d.h"
 #include "io/corpus/corpus.h"

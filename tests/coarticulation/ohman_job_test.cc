@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "core/build_paths.h"
 #include "core/error.h"
 #include "core/file_util.h"
 #include "core/markerset.h"

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/build_paths.h"
 #include "core/error.h"
 #include "core/markerset.h"
 #include "io/c3d/c3d.h"

@@ -150,7 +150,7 @@ void FitAndCancelMidway(MainWindow* w, FitDialog* dialog) {
   ASSERT_TRUE(dialog->running()) << dialog->status_label()->text().toStdString();
   EXPECT_FALSE(dialog->fit_button()->isEnabled());
   EXPECT_TRUE(dialog->cancel_button()->isEnabled());
-  ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, 60000));
+  ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, kHangGuardMs));
   // The window stays usable while the fit runs: step a frame in it.
   QApplication::setActiveWindow(w);
   ASSERT_TRUE(QTest::qWaitForWindowActive(w));
@@ -159,7 +159,7 @@ void FitAndCancelMidway(MainWindow* w, FitDialog* dialog) {
   EXPECT_EQ(w->playback()->frame(), frame + 1);
   QTest::mouseClick(dialog->cancel_button(), Qt::LeftButton);
   hold->Release();
-  ASSERT_TRUE(finished.wait(60000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   ASSERT_EQ(finished.count(), 1);
   EXPECT_EQ(finished.at(0).at(0).toString(), "canceled");
   EXPECT_FALSE(dialog->running());
@@ -197,7 +197,7 @@ TEST_F(FitInspectTest, FitCancelledMidwayLeavesTheModelFileThenRunsToTheEnd) {
   QSignalSpy saved(dialog, &FitDialog::ModelSaved);
   QTest::mouseClick(dialog->fit_button(), Qt::LeftButton);
   ASSERT_TRUE(dialog->running());
-  ASSERT_TRUE(finished.wait(180000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   ASSERT_EQ(finished.at(0).at(0).toString(), "succeeded") << w->log()->entries().back().toStdString();
   ASSERT_EQ(saved.count(), 1);
   EXPECT_EQ(saved.at(0).at(0).toString(), QString::fromStdString(models.string()));
@@ -249,7 +249,7 @@ TEST_F(FitInspectTest, FitDialogChecksAndUsesTheConfiguration) {
   QSignalSpy finished(dialog, &FitDialog::FitFinished);
   QTest::mouseClick(dialog->fit_button(), Qt::LeftButton);
   ASSERT_TRUE(dialog->running()) << dialog->status_label()->text().toStdString();
-  ASSERT_TRUE(finished.wait(180000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   ASSERT_EQ(finished.at(0).at(0).toString(), "succeeded") << w->log()->entries().back().toStdString();
   // The same fit by the job itself.
   jobs::FitOptions fit;
@@ -344,13 +344,13 @@ TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
     InstallHold(inspector->runner(), hold);
     QSignalSpy cancelled(inspector, &ErrorInspector::Finished);
     ASSERT_TRUE(w->InspectErrors(QString::fromStdString(models)));
-    ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, 60000));
+    ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, kHangGuardMs));
     auto* cancel = inspector->findChild<QPushButton*>("errorCancelButton");
     ASSERT_NE(cancel, nullptr);
     EXPECT_TRUE(cancel->isVisible());
     QTest::mouseClick(cancel, Qt::LeftButton);
     hold->Release();
-    ASSERT_TRUE(cancelled.wait(60000));
+    ASSERT_TRUE(cancelled.wait(kHangGuardMs));
     EXPECT_EQ(cancelled.at(0).at(0).toString(), "canceled");
     EXPECT_TRUE(inspector->results().empty());
     EXPECT_EQ(inspector->BarCount(), 0);
@@ -361,7 +361,7 @@ TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
   ASSERT_TRUE(w->InspectErrors(QString::fromStdString(models)));
   EXPECT_TRUE(w->errors_dock()->isVisible());
   EXPECT_TRUE(inspector->running());
-  ASSERT_TRUE(finished.wait(180000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   ASSERT_EQ(finished.at(0).at(0).toString(), "succeeded") << w->log()->entries().back().toStdString();
   EXPECT_EQ(inspector->skipped(), QStringList{"zz_foreign"});
   EXPECT_TRUE(w->log()->entries().filter("Left out of the error inspection").size() == 1);
@@ -416,7 +416,7 @@ TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
       [&] {
         return w->marker_view()->has_reconstruction() && inspector->reconstruction_take().toStdString() == worst_take;
       },
-      120000));
+      kHangGuardMs));
   EXPECT_GT(w->marker_view()->DrawnReconstructedCount(true), 0);
   int missing_face = 0;
   for (int64_t k = 0; k < w->take()->markers.markers(); ++k) {

@@ -80,10 +80,10 @@ class JobDialogTest : public ::testing::Test {
     QSignalSpy reopened(window_.get(), &MainWindow::CorpusOpened);
     QTest::mouseClick(dialog->run_button(), Qt::LeftButton);
     EXPECT_TRUE(dialog->running()) << dialog->status_label()->text().toStdString();
-    if (!finished.wait(120000)) return QStringLiteral("timeout");
+    if (!finished.wait(kHangGuardMs)) return QStringLiteral("timeout");
     const QString outcome = finished.at(0).at(0).toString();
     if (outcome == QStringLiteral("succeeded") && dialog->spec().writes_corpus) {
-      EXPECT_TRUE(reopened.count() > 0 || reopened.wait(30000));
+      EXPECT_TRUE(reopened.count() > 0 || reopened.wait(kHangGuardMs));
       EXPECT_TRUE(WaitForTake(window_.get(), "s1"));
     }
     return outcome;
@@ -140,12 +140,12 @@ TEST_F(JobDialogTest, SuggestedTargetsRunFromTheWindowAndACancelMidwayWritesNoth
   });
   QSignalSpy finished(dialog, &JobDialog::JobFinished);
   QTest::mouseClick(dialog->run_button(), Qt::LeftButton);
-  ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, 30000));
+  ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, kHangGuardMs));
   EXPECT_TRUE(dialog->cancel_button()->isEnabled());
   EXPECT_FALSE(dialog->run_button()->isEnabled());
   QTest::mouseClick(dialog->cancel_button(), Qt::LeftButton);
   hold->resume.release();
-  ASSERT_TRUE(finished.wait(60000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   EXPECT_EQ(finished.at(0).at(0).toString(), QStringLiteral("canceled"));
   EXPECT_EQ(FindTier(Corpus::Open(cuer_->corpus).LoadTiers("s0"), "keys_suggested"), nullptr);
   EXPECT_TRUE(dialog->run_button()->isEnabled());

@@ -24,6 +24,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/build_paths.h"
 #include "io/corpus/corpus.h"
 #include "tests/testing/testing.h"
 

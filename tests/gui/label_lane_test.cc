@@ -43,8 +43,8 @@ namespace {
 
 constexpr double kRate = 100.0;
 constexpr int kFrames = 50;
-constexpr int kAutosaveMs = 300;  // the tests shorten the default few seconds
-constexpr int kWaitMs = 10000;    // upper bound for a save on a loaded test machine
+constexpr int kAutosaveMs = 300;       // the tests shorten the default few seconds
+constexpr int kWaitMs = kHangGuardMs;  // upper bound for a save on a loaded test machine
 
 Take MakeTake() {
   Take t;

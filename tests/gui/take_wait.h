@@ -8,9 +8,15 @@
 
 namespace csw::gui {
 
+// How long a GUI test waits for background work (a take, a job, a save)
+// before calling it hung. A guard against hangs, not a speed check (speed is
+// measured in bench/): CI hosts have run the suite up to 8x slower than a
+// developer's machine, and a test then waited 195 s for a 27 s job.
+inline constexpr int kHangGuardMs = 900000;
+
 // Runs the event loop until `w` shows the take `name` (any take when empty)
 // and loads none; false after `timeout_ms`.
-inline bool WaitForTake(MainWindow* w, const std::string& name = {}, int timeout_ms = 30000) {
+inline bool WaitForTake(MainWindow* w, const std::string& name = {}, int timeout_ms = kHangGuardMs) {
   return QTest::qWaitFor([&] { return !w->take_loading() && w->take() && (name.empty() || w->take()->name == name); },
                          timeout_ms);
 }

@@ -160,7 +160,7 @@ TEST_F(ViewerTest, OpenCorpusListsTakesWithTheirFacts) {
   b->setCurrentItem(b->topLevelItem(1));
   EXPECT_TRUE(w->take_loading());
   EXPECT_EQ(w->loading_take(), "beta");
-  ASSERT_TRUE(shown.wait(30000));
+  ASSERT_TRUE(shown.wait(kHangGuardMs));
   EXPECT_EQ(shown.at(0).at(0).toString(), "beta");
   EXPECT_FALSE(w->take_loading());
   ASSERT_TRUE(w->take());
@@ -340,7 +340,7 @@ TEST_F(ViewerTest, ATakeLoadsOffTheGuiThreadWhileTheWindowKeepsRunning) {
   EXPECT_TRUE(busy->isVisible());
   EXPECT_TRUE(w->statusBar()->currentMessage().contains("Loading take beta"))
       << w->statusBar()->currentMessage().toStdString();
-  ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, 20000));
+  ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, kHangGuardMs));
   // Held: the loop keeps running and the window keeps working on the shown take.
   const int ticks_before = ticks, paints_before = paints.count;
   w->marker_view()->update();
@@ -353,7 +353,7 @@ TEST_F(ViewerTest, ATakeLoadsOffTheGuiThreadWhileTheWindowKeepsRunning) {
   EXPECT_TRUE(w->take_loading());
   // Released: beta shows, rewound, and the busy indication goes.
   hold->Release();
-  ASSERT_TRUE(shown.wait(20000));
+  ASSERT_TRUE(shown.wait(kHangGuardMs));
   EXPECT_EQ(shown.at(0).at(0).toString(), "beta");
   EXPECT_EQ(w->take()->name, "beta");
   EXPECT_EQ(w->marker_view()->DrawnMarkerCount(), 2);
@@ -377,11 +377,11 @@ TEST_F(ViewerTest, ATakeLoadsOffTheGuiThreadWhileTheWindowKeepsRunning) {
     hold->done = true;
   });
   ASSERT_TRUE(w->SelectTake("alpha"));
-  ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, 20000));
+  ASSERT_TRUE(QTest::qWaitFor([&] { return hold->reached.load(); }, kHangGuardMs));
   ASSERT_TRUE(w->SelectTake("beta"));
   EXPECT_FALSE(w->take_loading());
   hold->Release();
-  ASSERT_TRUE(QTest::qWaitFor([&] { return !w->take_loader()->running(); }, 20000));
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !w->take_loader()->running(); }, kHangGuardMs));
   QTest::qWait(0);  // the loader's end is a queued call
   QCoreApplication::processEvents();
   EXPECT_EQ(shown.count(), 0);
@@ -398,7 +398,7 @@ TEST_F(ViewerTest, ATakeLoadsOffTheGuiThreadWhileTheWindowKeepsRunning) {
   QSignalSpy failed(w.get(), &MainWindow::TakeLoadFailed);
   const int errors = w->log()->CountLevel(LogPanel::Level::kError);
   ASSERT_TRUE(w->SelectTake("no_such_take"));
-  ASSERT_TRUE(failed.wait(20000));
+  ASSERT_TRUE(failed.wait(kHangGuardMs));
   EXPECT_EQ(failed.at(0).at(0).toString(), "no_such_take");
   EXPECT_EQ(w->log()->CountLevel(LogPanel::Level::kError), errors + 1);
   EXPECT_TRUE(w->log()->entries().back().contains("no_such_take"));
@@ -595,7 +595,7 @@ TEST_F(ViewerTest, CancellingABackgroundImportMidwayLeavesTheCorpusUnchanged) {
   ASSERT_TRUE(w->StartImport(options));
   ASSERT_TRUE(w->import_progress() != nullptr);
   EXPECT_TRUE(w->import_progress()->isVisible());
-  ASSERT_TRUE(QTest::qWaitFor([&] { return reached.load(); }, 20000));
+  ASSERT_TRUE(QTest::qWaitFor([&] { return reached.load(); }, kHangGuardMs));
   EXPECT_GT(reached_fraction.load(), 0.0);
   EXPECT_LT(reached_fraction.load(), 1.0);
   // The GUI stays responsive while the job runs: back in the main window, step a frame.
@@ -607,7 +607,7 @@ TEST_F(ViewerTest, CancellingABackgroundImportMidwayLeavesTheCorpusUnchanged) {
   ASSERT_TRUE(cancel != nullptr);
   QTest::mouseClick(cancel, Qt::LeftButton);
   resume.release();
-  ASSERT_TRUE(finished.wait(20000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   EXPECT_FALSE(w->import_runner()->running());
   EXPECT_EQ(w->import_progress(), nullptr);
   EXPECT_TRUE(w->log()->entries().back().startsWith("Import cancelled"));
@@ -616,7 +616,7 @@ TEST_F(ViewerTest, CancellingABackgroundImportMidwayLeavesTheCorpusUnchanged) {
   // The same import, not cancelled, lands both takes.
   w->import_runner()->SetWorkerHook(nullptr);
   ASSERT_TRUE(w->StartImport(options));
-  ASSERT_TRUE(finished.wait(30000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   EXPECT_EQ(TakeNames(), (std::vector<std::string>{"alpha", "beta", "delta", "gamma"}));
   EXPECT_EQ(w->browser()->take_count(), 4);
 }
@@ -630,7 +630,7 @@ TEST_F(ViewerTest, DamagedOrForeignFilesAreLoggedAndTheAppStaysUsable) {
   QSignalSpy open_failed(w.get(), &MainWindow::CorpusOpenFailed);
   ASSERT_TRUE(w->OpenCorpus(QString::fromStdString(foreign.string())));
   EXPECT_TRUE(w->corpus_opening());
-  ASSERT_TRUE(open_failed.wait(20000));
+  ASSERT_TRUE(open_failed.wait(kHangGuardMs));
   EXPECT_TRUE(open_failed.at(0).at(1).toString().contains("notes.h5"))
       << open_failed.at(0).at(1).toString().toStdString();
   EXPECT_FALSE(w->corpus_opening());
@@ -657,7 +657,7 @@ TEST_F(ViewerTest, DamagedOrForeignFilesAreLoggedAndTheAppStaysUsable) {
   options.files = {c3d.string()};
   options.corpus = corpus_;
   ASSERT_TRUE(w->StartImport(options));
-  ASSERT_TRUE(finished.wait(20000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   EXPECT_EQ(w->log()->CountLevel(LogPanel::Level::kError), 2);
   EXPECT_TRUE(w->log()->entries().back().startsWith("error: Import failed:"));
   EXPECT_TRUE(w->log()->entries().back().contains("broken.c3d"));

@@ -254,7 +254,7 @@ TEST_F(ViewsTest, ExportedLabelTiersReadBackAsTheTakesTiers) {
     const fs::path path = *dir_ / (std::string("sentence_1.") + ext);
     QSignalSpy finished(w->exporter(), &ExportRunner::Finished);
     ASSERT_TRUE(w->ExportLabels(QString::fromStdString(path.string())));
-    ASSERT_TRUE(finished.wait(30000));
+    ASSERT_TRUE(finished.wait(kHangGuardMs));
     ASSERT_TRUE(finished.at(0).at(0).toBool()) << finished.at(0).at(2).toString().toStdString();
     const bool textgrid = std::string(ext) == "TextGrid";
     const std::vector<LabelTier> back = textgrid ? ReadTextGrid(path.string()) : ReadEaf(path.string());
@@ -293,7 +293,7 @@ TEST_F(ViewsTest, ExportedLabelTiersReadBackAsTheTakesTiers) {
   QSignalSpy finished(w->exporter(), &ExportRunner::Finished);
   const fs::path bad = *dir_ / "labels.csv";
   ASSERT_TRUE(w->ExportLabels(QString::fromStdString(bad.string())));
-  ASSERT_TRUE(finished.wait(30000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   EXPECT_FALSE(finished.at(0).at(0).toBool());
   EXPECT_FALSE(fs::exists(bad));
 }
@@ -305,7 +305,7 @@ TEST_F(ViewsTest, ExportedModelFileIsCopiedWithASummaryOfItsContents) {
   const fs::path copy = *dir_ / "exported-keys.h5";
   QSignalSpy finished(w->exporter(), &ExportRunner::Finished);
   ASSERT_TRUE(w->ExportModelFile(QString::fromStdString(keys_), QString::fromStdString(copy.string())));
-  ASSERT_TRUE(finished.wait(30000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   ASSERT_TRUE(finished.at(0).at(0).toBool()) << finished.at(0).at(2).toString().toStdString();
   EXPECT_EQ(FileBytes(copy), FileBytes(keys_));
   const FileSummary& s = w->exporter()->summary();
@@ -326,7 +326,7 @@ TEST_F(ViewsTest, ExportedModelFileIsCopiedWithASummaryOfItsContents) {
   // A corpus is not a model file: refused, nothing written.
   const fs::path wrong = *dir_ / "not-a-model.h5";
   ASSERT_TRUE(w->ExportModelFile(QString::fromStdString(corpus_), QString::fromStdString(wrong.string())));
-  ASSERT_TRUE(finished.wait(30000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   EXPECT_FALSE(finished.at(1).at(0).toBool());
   EXPECT_FALSE(fs::exists(wrong));
 }
@@ -363,7 +363,7 @@ TEST_F(ViewsTest, ExportedDictionaryFileSummaryNamesItsUnits) {
   const fs::path copy = *dir_ / "exported-dict.h5";
   QSignalSpy finished(w->exporter(), &ExportRunner::Finished);
   ASSERT_TRUE(w->ExportModelFile(QString::fromStdString(source.string()), QString::fromStdString(copy.string())));
-  ASSERT_TRUE(finished.wait(30000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   ASSERT_TRUE(finished.at(0).at(0).toBool()) << finished.at(0).at(2).toString().toStdString();
   EXPECT_EQ(FileBytes(copy), FileBytes(source));
   const FileSummary& s = w->exporter()->summary();
@@ -384,7 +384,7 @@ TEST_F(ViewsTest, PhasingAndConfusionViewsShowTheJobsResults) {
   QSignalSpy finished(view, &PhasingView::Finished);
   ASSERT_TRUE(w->ShowPhasing(QString::fromStdString(keys_)));
   EXPECT_TRUE(w->phasing_dock()->isVisible());
-  ASSERT_TRUE(finished.wait(120000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   ASSERT_EQ(finished.at(0).at(0).toString(), "succeeded") << view->status_label()->text().toStdString();
   const AnalysisData& data = view->data();
   ASSERT_FALSE(data.keys_score.is_null()) << data.notes.join("; ").toStdString();
@@ -448,7 +448,7 @@ TEST_F(ViewsTest, PhasingAndConfusionViewsShowTheJobsResults) {
   std::ofstream(json_path) << phasing.dump(1);
   view->SetMethod(0);
   ASSERT_TRUE(view->OpenJson(QString::fromStdString(json_path.string())));
-  ASSERT_TRUE(finished.wait(30000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   ASSERT_EQ(finished.at(1).at(0).toString(), "succeeded") << view->status_label()->text().toStdString();
   EXPECT_TRUE(view->data().keys_score.is_null());
   EXPECT_EQ(view->data().keys.size(), phasing["keys_measured"].get<size_t>());
@@ -460,7 +460,7 @@ TEST_F(ViewsTest, PhasingAndConfusionViewsShowTheJobsResults) {
   const fs::path other = *dir_ / "other.json";
   std::ofstream(other) << R"({"hello": 1})";
   ASSERT_TRUE(view->OpenJson(QString::fromStdString(other.string())));
-  ASSERT_TRUE(finished.wait(30000));
+  ASSERT_TRUE(finished.wait(kHangGuardMs));
   EXPECT_EQ(finished.at(2).at(0).toString(), "failed");
   EXPECT_EQ(view->data().keys.size(), phasing["keys_measured"].get<size_t>());
 }

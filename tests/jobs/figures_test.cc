@@ -9,6 +9,7 @@
 #include <fstream>
 #include <string>
 
+#include "core/build_paths.h"
 #include "core/error.h"
 #include "tests/testing/testing.h"
 

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "analysis/keys/hand_features.h"
+#include "core/build_paths.h"
 #include "core/error.h"
 #include "core/markerset.h"
 #include "datasets/virtual_cuer.h"

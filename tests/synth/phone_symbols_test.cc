@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "core/build_paths.h"
 #include "core/error.h"
 
 namespace csw {

@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/build_paths.h"
 #include "core/error.h"
 #include "synth/cueing.h"
 #include "tests/testing/testing.h"

@@ -4,6 +4,8 @@
 #include <cstdlib>
 #include <random>
 
+#include "core/build_paths.h"
+
 namespace csw::testing {
 
 namespace fs = std::filesystem;

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <random>
 
+#include "core/build_paths.h"
 #include "core/error.h"
 #include "tests/testing/testing.h"
 #include "workbench/jobs/job_util.h"

@@ -11,6 +11,7 @@
 #include <functional>
 #include <sstream>
 
+#include "core/build_paths.h"
 #include "core/error.h"
 #include "workbench/jobs/dict_job.h"
 #include "workbench/jobs/figures.h"
@@ -23,8 +24,8 @@
 #include "workbench/jobs/say_job.h"
 #include "workbench/jobs/video_job.h"
 
-#ifndef CSW_SOURCE_DIR_DEFAULT
-#define CSW_SOURCE_DIR_DEFAULT ""
+#ifndef CSW_DEMO_SOURCE_DIR
+#define CSW_DEMO_SOURCE_DIR ""
 #endif
 
 namespace csw::jobs {
@@ -369,7 +370,7 @@ std::string HtmlEscape(const std::string& text) {
 std::string DemoDataDir() {
   std::vector<fs::path> candidates;
   if (const char* env = std::getenv("CSW_SOURCE_DIR"); env && *env) candidates.push_back(fs::path(env) / "datasets");
-  if (*CSW_SOURCE_DIR_DEFAULT) candidates.push_back(fs::path(CSW_SOURCE_DIR_DEFAULT) / "datasets");
+  if (*CSW_DEMO_SOURCE_DIR) candidates.push_back(fs::path(CSW_DEMO_SOURCE_DIR) / "datasets");
   candidates.push_back(fs::current_path() / "datasets");
   std::error_code ec;
   for (const fs::path& c : candidates)

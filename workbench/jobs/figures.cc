@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <mutex>
 
+#include "core/build_paths.h"
 #include "core/error.h"
 #include "workbench/report/figures_api.h"
 

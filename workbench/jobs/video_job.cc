@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/build_paths.h"
 #include "core/error.h"
 #include "io/c3d/c3d.h"
 #include "io/corpus/corpus.h"

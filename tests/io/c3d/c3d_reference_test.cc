@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/build_paths.h"
 #include "io/c3d/c3d.h"
 #include "tests/testing/testing.h"
 
