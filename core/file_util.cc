@@ -1,10 +1,12 @@
 #include "core/file_util.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <filesystem>
@@ -60,19 +62,59 @@ void ReplaceFileDurably(const std::string& temp, const std::string& path) {
   FsyncPath(dir.empty() ? std::string(".") : dir.string(), true, path);
 }
 
+namespace {
+
+// This process, as the lock file names its holder: "csw-workbench (pid 4242)
+// since 2026-12-03T14:05:09Z".
+std::string HolderLine() {
+  std::string name = "process";
+  std::ifstream comm("/proc/self/comm");
+  std::string line;
+  if (std::getline(comm, line) && !line.empty()) name = line;
+  return name + " (pid " + std::to_string(::getpid()) + ") since " + UtcNow(UtcZone::kZ);
+}
+
+// The holder a lock file names, "" when it names none or a process that no
+// longer runs (a holder that has just taken the lock may not have written its
+// line yet: the previous holder's line is then stale).
+std::string ReadHolder(int fd) {
+  char buf[256] = {};
+  const ssize_t n = ::pread(fd, buf, sizeof(buf) - 1, 0);
+  if (n <= 0) return "";
+  std::string line(buf, static_cast<size_t>(n));
+  line = line.substr(0, line.find('\n'));
+  const size_t at = line.find("(pid ");
+  if (at == std::string::npos) return "";
+  const long pid = std::strtol(line.c_str() + at + 5, nullptr, 10);
+  if (pid <= 0 || (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)) return "";
+  for (char& c : line)
+    if (static_cast<unsigned char>(c) < 0x20) c = ' ';
+  return line;
+}
+
+}  // namespace
+
 WriterLock::WriterLock(const std::string& path, const std::string& what_is_locked)
     : lock_path_(HiddenSibling(path, ".csw-lock")) {
   fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0) throw IoError(path, "cannot create the lock file " + lock_path_ + ": " + std::strerror(errno));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int saved = errno;
+    const std::string holder = saved == EWOULDBLOCK ? ReadHolder(fd_) : "";
     ::close(fd_);
     fd_ = -1;
     if (saved == EWOULDBLOCK) {
-      throw IoError(path, "another csw command (in this or another process) is writing this " + what_is_locked + " (" +
-                              lock_path_ + " is locked); wait for it to finish");
+      const std::string who = holder.empty() ? "another csw command (in this or another process)" : holder;
+      throw IoError(
+          path, who + " is writing this " + what_is_locked + " (" + lock_path_ + " is locked); wait for it to finish");
     }
     throw IoError(path, "cannot lock " + lock_path_ + ": " + std::strerror(saved));
+  }
+  // Name the holder for a writer refused meanwhile (best effort: the lock
+  // itself is the flock, not this text).
+  const std::string line = HolderLine() + "\n";
+  if (::ftruncate(fd_, 0) == 0) {
+    [[maybe_unused]] const ssize_t w = ::pwrite(fd_, line.data(), line.size(), 0);
   }
 }
 

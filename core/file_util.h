@@ -35,8 +35,11 @@ void ReplaceFileDurably(const std::string& temp, const std::string& path);
 
 // An exclusive advisory lock (flock) on the sibling file ".<name>.csw-lock" of
 // `path`, held for the object's lifetime: one writer at a time per file, in
-// this process or another. Throws IoError with `what_is_locked` in the message
-// (e.g. "corpus", "model file") when another writer holds it.
+// this process or another. The holder writes its name, pid and start time into
+// the lock file; a refused writer gets an IoError naming that holder ("csw
+// (pid 4242) since ... is writing this corpus ..."; "another csw command" when
+// the file names no live process) and `what_is_locked` (e.g. "corpus", "model
+// file").
 class WriterLock {
  public:
   WriterLock(const std::string& path, const std::string& what_is_locked);

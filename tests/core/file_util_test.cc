@@ -1,8 +1,12 @@
 #include "core/file_util.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -90,10 +94,74 @@ TEST(FileUtil, WriterLockIsExclusiveAndReleased) {
     } catch (const IoError& e) {
       const std::string m = e.what();
       EXPECT_NE(m.find("models.h5"), std::string::npos) << m;
-      EXPECT_NE(m.find("model file"), std::string::npos) << m;
+      EXPECT_NE(m.find("is writing this model file"), std::string::npos) << m;
+      // The holder is named: this test program, by its pid.
+      EXPECT_NE(m.find("(pid " + std::to_string(::getpid()) + ") since 20"), std::string::npos) << m;
+      EXPECT_NE(m.find("test_core"), std::string::npos) << m;
     }
   }
   EXPECT_NO_THROW(WriterLock again(path, "model file"));
+}
+
+// Another process holds the lock: the refusal names it by its pid; once it
+// is gone the lock is free (the kernel drops a dead process's flock).
+TEST(FileUtil, WriterLockNamesAHolderInAnotherProcess) {
+  const fs::path d = TempDir("lock_other");
+  const std::string path = (d / "c.h5").string();
+  int ready[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::close(ready[0]);
+    WriterLock held(path, "corpus");
+    const char c = 'x';
+    if (::write(ready[1], &c, 1) != 1) ::_exit(2);
+    for (;;) ::pause();  // until killed
+  }
+  ::close(ready[1]);
+  char c = 0;
+  ASSERT_EQ(::read(ready[0], &c, 1), 1);
+  ::close(ready[0]);
+  std::string message;
+  try {
+    WriterLock second(path, "corpus");
+  } catch (const IoError& e) {
+    message = e.what();
+  }
+  ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  EXPECT_NE(message.find("(pid " + std::to_string(child) + ") since 20"), std::string::npos) << message;
+  EXPECT_NE(message.find("is writing this corpus"), std::string::npos) << message;
+  EXPECT_NO_THROW(WriterLock again(path, "corpus"));
+}
+
+// A lock file whose line names a process that no longer runs (the new holder
+// has not written its own line yet) is not believed.
+TEST(FileUtil, WriterLockIgnoresAStaleHolderLine) {
+  const fs::path d = TempDir("lock_stale");
+  const std::string path = (d / "c.h5").string();
+  const pid_t gone = ::fork();
+  ASSERT_GE(gone, 0);
+  if (gone == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(gone, &status, 0);
+  const std::string lock_path = (d / ".c.h5.csw-lock").string();
+  std::ofstream(lock_path) << "ghost (pid " << gone << ") since 2026-01-01T00:00:00Z\n";
+  const int fd = ::open(lock_path.c_str(), O_RDWR | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+  std::string message;
+  try {
+    WriterLock second(path, "corpus");
+  } catch (const IoError& e) {
+    message = e.what();
+  }
+  ::close(fd);
+  EXPECT_EQ(message.find("ghost"), std::string::npos) << message;
+  EXPECT_NE(message.find("another csw command (in this or another process) is writing this corpus"), std::string::npos)
+      << message;
 }
 
 }  // namespace

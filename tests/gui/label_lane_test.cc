@@ -8,6 +8,7 @@
 #include "workbench/gui/label_lane.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <QAction>
 #include <QApplication>
@@ -286,6 +287,9 @@ TEST_F(LabelLaneTest, LabelsSurviveReopenAndAnEditMadeUnderAnotherWritersLockIsS
   LogPanel& log = *w->log();
   ASSERT_TRUE(QTest::qWaitFor([&] { return log.CountLevel(LogPanel::Level::kWarning) >= 1; }, kWaitMs));
   EXPECT_TRUE(log.entries().back().contains("another writer holds the corpus")) << log.entries().back().toStdString();
+  // ... and names it: here this test program, by its pid.
+  EXPECT_TRUE(log.entries().back().contains(QStringLiteral("(pid %1) since ").arg(::getpid())))
+      << log.entries().back().toStdString();
   // Several retries later: still waiting, one warning only, the corpus unchanged.
   QTest::qWait(600);
   EXPECT_TRUE(s.HasUnsavedEdits());
