@@ -67,10 +67,12 @@ namespace {
 // This process, as the lock file names its holder: "csw-workbench (pid 4242)
 // since 2026-12-03T14:05:09Z".
 std::string HolderLine() {
-  std::string name = "process";
-  std::ifstream comm("/proc/self/comm");
-  std::string line;
-  if (std::getline(comm, line) && !line.empty()) name = line;
+  // The program's name, read once per process (a fork keeps it; the pid is asked every time).
+  static const std::string name = [] {
+    std::ifstream comm("/proc/self/comm");
+    std::string line;
+    return std::getline(comm, line) && !line.empty() ? line : std::string("process");
+  }();
   return name + " (pid " + std::to_string(::getpid()) + ") since " + UtcNow(UtcZone::kZ);
 }
 

@@ -24,6 +24,7 @@
 #include <set>
 #include <system_error>
 #include <thread>
+#include <utility>
 
 #include "core/error.h"
 #include "core/file_util.h"
@@ -1219,13 +1220,14 @@ struct CorpusTransaction::Impl {
     if (committed) throw Error(path + ": the transaction was already committed");
   }
 
-  TakeEntry& Entry(const std::string& name) {
+  const TakeEntry& Entry(const std::string& name) const {
     auto it = takes.find(name);
     if (name.empty() || name.find('/') != std::string::npos || it == takes.end()) {
       throw InvalidInput(path + ": no take named '" + name + "'");
     }
     return it->second;
   }
+  TakeEntry& Entry(const std::string& name) { return const_cast<TakeEntry&>(std::as_const(*this).Entry(name)); }
 
   // Creates a new, uniquely named HDF5 file in the folder, owned by the transaction.
   Handle NewFile(const std::string& take, const std::string& suffix, const std::string& format, std::string* rel) {
@@ -1526,6 +1528,15 @@ void CorpusTransaction::RemoveTake(const std::string& name) {
   if (e.writing) throw Error(impl_->path + ": take '" + name + "' is still being written");
   impl_->DiscardEntry(e);
   impl_->takes.erase(name);
+}
+
+std::vector<LabelTier> CorpusTransaction::LoadTiers(const std::string& take) const {
+  auto lock = h5::Lock();
+  impl_->CheckUsable();
+  const TakeEntry& e = impl_->Entry(take);
+  if (e.tiers_file.empty()) return {};
+  Handle f = OpenHdf5(impl_->Abs(e.tiers_file), H5F_ACC_RDONLY, Where{impl_->Abs(e.tiers_file)});
+  return ReadTiers(f.get(), Where{impl_->Abs(e.tiers_file)}, TakeObject(take));
 }
 
 void CorpusTransaction::WriteTiers(const std::string& take, const std::vector<LabelTier>& tiers) {

@@ -178,6 +178,11 @@ class CorpusTransaction {
   std::vector<std::string> TakeNames() const;
   // Throws InvalidInput when there is no such take.
   void RemoveTake(const std::string& name);
+  // The label tiers of a take as this transaction holds them: as stored when it
+  // began, or as WriteTiers/BeginTake last replaced them. Reads only that
+  // take's tiers file (a read-modify-write of one take's tiers costs the same
+  // whatever the corpus holds). Throws InvalidInput when there is no such take.
+  std::vector<LabelTier> LoadTiers(const std::string& take) const;
   // Replaces all label tiers of a take.
   void WriteTiers(const std::string& take, const std::vector<LabelTier>& tiers);
   // Stores a score set of a take, replacing the set of that name (the take's

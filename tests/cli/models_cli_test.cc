@@ -56,8 +56,8 @@ double Mean(const json& stats) { return stats.at("mean_mm").get<double>(); }
 // docs/models.md before issue 13 on the default layout (face 0.322 mm, hand
 // 1.362 mm) and within 10 % of those on lab2. Measured (docs/models.md): default
 // face hidden p99.9 0.90 / max 1.10 mm, hand 2.43 / 6.51 mm; lab2 face
-// 0.98 / 1.71 mm, hand 3.06 / 8.14 mm. Under the sanitizers: 4 sentences
-// (2 for training), code paths only.
+// 0.98 / 1.71 mm, hand 3.06 / 8.14 mm. Under the sanitizers: the default
+// layout only, 4 sentences (2 for training), code paths only.
 void HiddenWorstCases(const std::string& layout) {
   testing::TempDir dir;
   const int sentences = testing::kSanitized ? 4 : 18, training = testing::kSanitized ? 2 : 6;
@@ -120,7 +120,11 @@ void HiddenWorstCases(const std::string& layout) {
 }
 
 TEST(CliModels, HiddenSamplesWorstCasesDefaultLayout) { HiddenWorstCases("default"); }
-TEST(CliModels, HiddenSamplesWorstCasesLab2Layout) { HiddenWorstCases("lab2"); }
+TEST(CliModels, HiddenSamplesWorstCasesLab2Layout) {
+  // Under the sanitizers the default layout runs the same code paths (about 4 minutes there).
+  if (testing::kSanitized) GTEST_SKIP() << "the lab2 layout's limits are checked in the plain build";
+  HiddenWorstCases("lab2");
+}
 
 // The virtual cuer with simulated truth: 18 sentences, the first third (6)
 // for training, the rest held out. Targets of issue 4: visible face ≤ 1 mm,

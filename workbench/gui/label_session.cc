@@ -114,8 +114,8 @@ void TierSaver::Run() {
     const QString take = QString::fromStdString(job.take);
     const auto start = std::chrono::steady_clock::now();
     try {
-      CorpusTransaction tx(job.corpus);                                             // takes the writer lock
-      std::vector<LabelTier> tiers = Corpus::Open(job.corpus).LoadTiers(job.take);  // as stored now
+      CorpusTransaction tx(job.corpus);                       // takes the writer lock
+      std::vector<LabelTier> tiers = tx.LoadTiers(job.take);  // as stored now (another writer's tiers are kept)
       for (LabelTier& edited : job.tiers) {
         auto it = std::find_if(tiers.begin(), tiers.end(), [&](const LabelTier& t) { return t.name == edited.name; });
         if (it != tiers.end()) {

@@ -377,6 +377,48 @@ TEST(Corpus, LoadTiersReadsTheTiersAloneAsWritten) {
   EXPECT_THROW(Corpus::Open(path).LoadTiers("nope"), InvalidInput);
 }
 
+// The autosave reads a take's tiers through its own transaction (one file,
+// whatever the corpus holds): what was stored, then what it wrote itself.
+TEST(Corpus, TransactionLoadTiersSeesStoredThenPendingTiers) {
+  TempDir dir;
+  const std::string path = (dir / "c.h5").string();
+  WriteCorpus(path, {MakeFullTake("a"), MakeFullTake("b")});
+  LabelTier keys{"keys", LabelTier::Kind::kPoint, 0.0, 2.0, {{0.25, 0.25, "13"}, {1.5, 1.5, "00"}}};
+  LabelTier words{"mots", LabelTier::Kind::kInterval, 0.0, 1.0, {{0.0, 0.5, "bonjour"}, {0.5, 1.0, "ça"}}};
+  {
+    CorpusTransaction tx(path);
+    tx.WriteTiers("a", {keys});
+    tx.Commit();
+  }
+  CorpusTransaction tx(path);
+  std::vector<LabelTier> stored = tx.LoadTiers("a");
+  ASSERT_EQ(stored.size(), 1u);
+  EXPECT_EQ(stored[0].name, "keys");
+  EXPECT_EQ(stored[0].kind, LabelTier::Kind::kPoint);
+  ASSERT_EQ(stored[0].labels.size(), 2u);
+  EXPECT_EQ(stored[0].labels[0].start_s, 0.25);
+  EXPECT_EQ(stored[0].labels[1].text, "00");
+  stored.push_back(words);
+  tx.WriteTiers("a", stored);
+  const std::vector<LabelTier> pending = tx.LoadTiers("a");
+  ASSERT_EQ(pending.size(), 2u);
+  EXPECT_EQ(pending[1].name, "mots");
+  ASSERT_EQ(pending[1].labels.size(), 2u);
+  EXPECT_EQ(pending[1].labels[1].text, "ça");
+  EXPECT_EQ(pending[1].labels[1].end_s, 1.0);
+  // The other take is untouched; a missing one is an error naming it.
+  EXPECT_EQ(tx.LoadTiers("b").size(), Corpus::Open(path).LoadTiers("b").size());
+  try {
+    tx.LoadTiers("nope");
+    ADD_FAILURE() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("'nope'"), std::string::npos) << e.what();
+  }
+  tx.Commit();
+  EXPECT_EQ(Corpus::Open(path).LoadTiers("a").size(), 2u);
+  EXPECT_THROW(tx.LoadTiers("a"), Error);  // a committed transaction cannot be used
+}
+
 TEST(Corpus, RepeatedTierEditsKeepTheFileSizeBounded) {
   TempDir dir;
   const std::string path = (dir / "c.h5").string();
