@@ -19,8 +19,10 @@
 #include <QSignalSpy>
 #include <QTest>
 #include <QUndoStack>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
@@ -28,6 +30,7 @@
 #include <vector>
 
 #include "core/file_util.h"
+#include "core/progress.h"
 #include "io/corpus/corpus.h"
 #include "tests/gui/take_wait.h"
 #include "tests/testing/testing.h"
@@ -38,6 +41,7 @@
 #include "workbench/gui/main_window.h"
 #include "workbench/gui/playback.h"
 #include "workbench/gui/timeseries_panel.h"
+#include "workbench/jobs/import_job.h"
 
 namespace csw::gui {
 namespace {
@@ -112,7 +116,7 @@ class LabelLaneTest : public ::testing::Test {
     tx.Commit();
   }
 
-  std::unique_ptr<MainWindow> OpenWindow(const std::string& tier) {
+  std::unique_ptr<MainWindow> OpenWindow(const std::string& tier, const std::string& take = "alpha") {
     auto w = std::make_unique<MainWindow>(QString::fromStdString((dir_ / "settings.ini").string()));
     w->playback()->SetAudioEnabled(false);
     w->resize(1200, 800);
@@ -120,7 +124,7 @@ class LabelLaneTest : public ::testing::Test {
     QApplication::setActiveWindow(w.get());
     EXPECT_TRUE(QTest::qWaitForWindowActive(w.get()));
     EXPECT_TRUE(OpenAndWait(w.get(), corpus_));
-    EXPECT_TRUE(SelectAndWait(w.get(), "alpha"));
+    EXPECT_TRUE(SelectAndWait(w.get(), take));
     EXPECT_TRUE(w->SetLabelTier(QString::fromStdString(tier)));
     w->labels()->SetAutosaveDelay(kAutosaveMs);
     w->labels()->SetRetryDelay(100);
@@ -690,6 +694,99 @@ TEST_F(LabelLaneTest, SSnapsTheLabelToTheNearestSpeedMinimumOfTheMarkerLane) {
   Key(*w, Qt::Key_Z, Qt::ControlModifier);
   Key(*w, Qt::Key_Z, Qt::ControlModifier);
   EXPECT_EQ(ModelLabels(s), (Labels{{10, "12"}, {36, "34"}}));
+}
+
+// Issue 16's first "done when", on the embedded demo corpus itself
+// (datasets/demo/sentences, imported as the README's main command imports it):
+// on a new tier of one take, five targets typed from the keyboard, two undone,
+// one redone; autosave stores four without a user action, the take's own tiers
+// are kept, and a new window finds the four.
+class LabelLaneDemoCorpusTest : public LabelLaneTest {
+ protected:
+  void SetUp() override {
+    namespace fs = std::filesystem;
+    const fs::path demo = testing::SourceDir() / "datasets" / "demo" / "sentences";
+    ASSERT_TRUE(fs::exists(demo / "markerset.json")) << demo;
+    jobs::ImportOptions o;
+    for (const fs::directory_entry& e : fs::directory_iterator(demo)) {
+      const std::string ext = e.path().extension().string();
+      if (ext == ".c3d" || ext == ".TextGrid" || ext == ".wav") o.files.push_back(e.path().string());
+    }
+    ASSERT_GE(o.files.size(), 6u);
+    o.markerset = (demo / "markerset.json").string();
+    corpus_ = (dir_ / "demo.h5").string();
+    o.corpus = corpus_;
+    Progress quiet;
+    const jobs::ImportResult r = jobs::Import(o, quiet);
+    ASSERT_GE(r.takes.size(), 2u);
+  }
+};
+
+TEST_F(LabelLaneDemoCorpusTest, FiveTargetsOnANewTierUndoTwoRedoOneAutosaveAndReopenFindFour) {
+  const std::string take = "sentence_002";
+  const Corpus before = Corpus::Open(corpus_);
+  const std::vector<LabelTier> tiers_before = before.LoadTiers(take);
+  const double rate = before.Summary(take).rate_hz;
+  const int64_t last = before.Summary(take).frames - 1;
+  ASSERT_GT(rate, 0.0);
+  ASSERT_GT(last, 100);
+  for (const LabelTier& t : tiers_before) ASSERT_NE(t.name, "my_keys");
+
+  auto w = OpenWindow("my_keys", take);
+  LabelSession& s = *w->labels();
+  ASSERT_TRUE(s.has_take());
+  EXPECT_EQ(s.model()->size(), 0u);  // a new tier
+  Key(*w, Qt::Key_Home);
+  for (int i = 0; i < 3; ++i) Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 30
+  Type(*w, "15");
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);
+  Key(*w, Qt::Key_Right);  // 41
+  Type(*w, "23");
+  for (int i = 0; i < 5; ++i) Key(*w, Qt::Key_Right, Qt::ShiftModifier);  // 91
+  Type(*w, "31");
+  Key(*w, Qt::Key_Right, Qt::ShiftModifier);
+  Key(*w, Qt::Key_Left);  // 100
+  Type(*w, "00");
+  Key(*w, Qt::Key_End);  // the last frame
+  Type(*w, "44");
+  const int end = static_cast<int>(last);
+  EXPECT_EQ(ModelLabels(s), (Labels{{30, "15"}, {41, "23"}, {91, "31"}, {100, "00"}, {end, "44"}}));
+  Key(*w, Qt::Key_Z, Qt::ControlModifier);
+  Key(*w, Qt::Key_Z, Qt::ControlModifier);
+  Key(*w, Qt::Key_Z, Qt::ControlModifier | Qt::ShiftModifier);
+  const Labels four{{30, "15"}, {41, "23"}, {91, "31"}, {100, "00"}};
+  EXPECT_EQ(ModelLabels(s), four);
+  EXPECT_EQ(w->label_counts()->total(), 4);
+
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !s.HasUnsavedEdits(); }, kWaitMs));
+  // Stored: the new point tier at exactly those frames, the take's own tiers as they were.
+  const std::vector<LabelTier> tiers_after = Corpus::Open(corpus_).LoadTiers(take);
+  ASSERT_EQ(tiers_after.size(), tiers_before.size() + 1);
+  Labels stored;
+  for (const LabelTier& t : tiers_after) {
+    if (t.name != "my_keys") {
+      const auto it =
+          std::find_if(tiers_before.begin(), tiers_before.end(), [&](const LabelTier& b) { return b.name == t.name; });
+      ASSERT_NE(it, tiers_before.end()) << t.name;
+      EXPECT_EQ(t.labels.size(), it->labels.size()) << t.name;
+      continue;
+    }
+    EXPECT_EQ(t.kind, LabelTier::Kind::kPoint);
+    for (const Label& l : t.labels) {
+      const double f = l.start_s * rate;
+      EXPECT_NEAR(f, std::round(f), 1e-6) << l.start_s;
+      stored.emplace_back(static_cast<int>(std::lround(f)), l.text);
+    }
+  }
+  EXPECT_EQ(stored, four);
+  // The other takes are untouched.
+  for (const std::string other : {"sentence_001", "sentence_003"})
+    EXPECT_EQ(Corpus::Open(corpus_).LoadTiers(other).size(), before.LoadTiers(other).size()) << other;
+
+  w.reset();
+  auto again = OpenWindow("my_keys", take);
+  EXPECT_EQ(ModelLabels(*again->labels()), four);
+  EXPECT_EQ(again->log()->CountLevel(LogPanel::Level::kError), 0);
 }
 
 // The demo corpus's take (the virtual cuer's first sentence): its `keys` tier
