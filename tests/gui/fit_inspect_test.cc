@@ -28,12 +28,11 @@
 #include <string>
 #include <vector>
 
-#include "datasets/virtual_cuer.h"
+#include "core/progress.h"
 #include "io/corpus/corpus.h"
 #include "io/models/model_file.h"
 #include "tests/gui/take_wait.h"
 #include "tests/testing/testing.h"
-#include "workbench/gui/demo_take.h"
 #include "workbench/gui/error_inspector.h"
 #include "workbench/gui/fit_dialog.h"
 #include "workbench/gui/job_runner.h"
@@ -42,6 +41,7 @@
 #include "workbench/gui/marker_view.h"
 #include "workbench/gui/playback.h"
 #include "workbench/jobs/fit_job.h"
+#include "workbench/jobs/import_job.h"
 #include "workbench/jobs/invert_job.h"
 
 namespace csw::gui {
@@ -54,28 +54,25 @@ std::string FileBytes(const fs::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-// A corpus of three virtual-cuer sentences (seed 7) that remember the virtual
-// cuer's marker set, as `csw import --markerset` would leave them; made once.
+// The demo corpus's first three sentences, remembering their marker set as
+// `csw import --markerset` leaves them; made once.
 class FitInspectTest : public ::testing::Test {
  protected:
+  // The embedded demo corpus's first three sentences (datasets/demo/sentences,
+  // imported as the README's main command imports them, with their marker set).
   static void SetUpTestSuite() {
     dir_ = new testing::TempDir();
     corpus_ = (*dir_ / "corpus.h5").string();
-    SimulateOptions s;
-    s.seed = 7;
-    s.audio = false;
-    s.write_truth = false;
-    const VirtualCuer cuer(s);
-    const std::string set = MarkerSetToJson(DemoMarkerSet());
-    const std::vector<std::string> sentences = ShippedSentences();
-    ASSERT_GE(sentences.size(), 3u);
-    CorpusTransaction tx(corpus_);
-    for (int i = 0; i < 3; ++i) {
-      Take t = cuer.SimulateSentence("sentence_" + std::to_string(i + 1), sentences[static_cast<size_t>(i)]).take;
-      t.markerset_json = set;
-      tx.WriteTake(t);
+    const std::filesystem::path demo = testing::SourceDir() / "datasets" / "demo" / "sentences";
+    jobs::ImportOptions o;
+    for (const char* name : {"sentence_001", "sentence_002", "sentence_003"}) {
+      o.files.push_back((demo / (std::string(name) + ".c3d")).string());
+      o.files.push_back((demo / (std::string(name) + ".TextGrid")).string());
     }
-    tx.Commit();
+    o.markerset = (demo / "markerset.json").string();
+    o.corpus = corpus_;
+    Progress quiet;
+    ASSERT_EQ(jobs::Import(o, quiet).takes.size(), 3u);
   }
   static void TearDownTestSuite() {
     delete dir_;
@@ -183,7 +180,7 @@ TEST_F(FitInspectTest, FitCancelledMidwayLeavesTheModelFileThenRunsToTheEnd) {
   ASSERT_NE(dialog, nullptr);
   EXPECT_TRUE(dialog->isVisible());
   EXPECT_EQ(dialog->take_list()->count(), 3);
-  EXPECT_EQ(dialog->CheckedTakes(), (QStringList{"sentence_1", "sentence_2", "sentence_3"}));
+  EXPECT_EQ(dialog->CheckedTakes(), (QStringList{"sentence_001", "sentence_002", "sentence_003"}));
   dialog->SetKind(QStringLiteral("face"));
   dialog->SetOutput(QString::fromStdString(models.string()));
 
@@ -207,12 +204,12 @@ TEST_F(FitInspectTest, FitCancelledMidwayLeavesTheModelFileThenRunsToTheEnd) {
   ASSERT_TRUE(loaded.face.has_value());
   EXPECT_FALSE(loaded.hand.has_value());
   EXPECT_EQ(dialog->result()["kind"], "face");
-  EXPECT_EQ(dialog->result()["training_takes"], nlohmann::json({"sentence_1", "sentence_2", "sentence_3"}));
+  EXPECT_EQ(dialog->result()["training_takes"], nlohmann::json({"sentence_001", "sentence_002", "sentence_003"}));
 
   // 3. Another fit into the same file, cancelled midway: the file's bytes are unchanged.
   const std::string before = FileBytes(models);
   dialog->SetKind(QStringLiteral("hand"));
-  dialog->SetCheckedTakes({"sentence_1", "sentence_3"});
+  dialog->SetCheckedTakes({"sentence_001", "sentence_003"});
   FitAndCancelMidway(w.get(), dialog);
   EXPECT_EQ(FileBytes(models), before);
   // ... and no temporary model file is left behind (the lock file stays, as after any write).
@@ -288,14 +285,14 @@ TEST_F(FitInspectTest, ClickingTheWorstUtteranceShowsItsWorstFrame) {
     tx.WriteTake(foreign);
     tx.Commit();
   }
-  const std::vector<std::string> sentences = {"sentence_1", "sentence_2", "sentence_3"};
+  const std::vector<std::string> sentences = {"sentence_001", "sentence_002", "sentence_003"};
   // A face model fitted on the first two sentences (the third is held out).
   const std::string models = (*dir_ / "inspect-models.h5").string();
   {
     jobs::FitOptions fit;
     fit.corpus = corpus;
     fit.kind = "face";
-    fit.takes = {"sentence_1", "sentence_2"};
+    fit.takes = {"sentence_001", "sentence_002"};
     fit.output = models;
     Progress progress;
     jobs::Fit(fit, progress);

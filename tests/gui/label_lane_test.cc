@@ -42,6 +42,7 @@
 #include "workbench/gui/playback.h"
 #include "workbench/gui/timeseries_panel.h"
 #include "workbench/jobs/import_job.h"
+#include "workbench/jobs/keys_suggest_job.h"
 
 namespace csw::gui {
 namespace {
@@ -787,6 +788,61 @@ TEST_F(LabelLaneDemoCorpusTest, FiveTargetsOnANewTierUndoTwoRedoOneAutosaveAndRe
   auto again = OpenWindow("my_keys", take);
   EXPECT_EQ(ModelLabels(*again->labels()), four);
   EXPECT_EQ(again->log()->CountLevel(LogPanel::Level::kError), 0);
+}
+
+// Suggested targets on the demo corpus: Analysis > Suggest Target Frames's job
+// (jobs::KeysSuggest, run here directly) writes keys_suggested; N goes to the
+// first and Enter accepts three in a row, each at its suggestion's frame with
+// its code, and autosave stores them.
+TEST_F(LabelLaneDemoCorpusTest, EnterAcceptsThreeSuggestedTargetsOfTheSuggestJob) {
+  const std::string take = "sentence_002";
+  jobs::KeysSuggestOptions o;
+  o.corpus = corpus_;
+  o.takes = {take};
+  Progress quiet;
+  const nlohmann::json r = jobs::KeysSuggest(o, quiet);
+  ASSERT_GE(r["suggested"].get<int>(), 4) << r.dump();
+  const Corpus c = Corpus::Open(corpus_);
+  const double rate = c.Summary(take).rate_hz;
+  Labels suggested;  // (frame, code) of the job's tier, in time order, after frame 0
+  for (const LabelTier& t : c.LoadTiers(take)) {
+    if (t.name != "keys_suggested") continue;
+    for (const Label& l : t.labels) {
+      const int frame = static_cast<int>(std::lround(l.start_s * rate));
+      if (frame > 0) suggested.emplace_back(frame, l.text);
+    }
+  }
+  std::sort(suggested.begin(), suggested.end());
+  // Suggestions alone on their frame (the job may propose one speed minimum for
+  // two successive keys; Enter there would accept either): the first three.
+  Labels alone;
+  for (size_t i = 0; i < suggested.size(); ++i) {
+    const bool near_prev = i > 0 && suggested[i].first - suggested[i - 1].first <= 2;
+    const bool near_next = i + 1 < suggested.size() && suggested[i + 1].first - suggested[i].first <= 2;
+    if (!near_prev && !near_next) alone.push_back(suggested[i]);
+  }
+  ASSERT_GE(alone.size(), 3u) << ::testing::PrintToString(suggested);
+
+  auto w = OpenWindow("accepted_keys", take);
+  LabelSession& s = *w->labels();
+  ASSERT_EQ(s.suggestions().size(), suggested.size());
+  Key(*w, Qt::Key_Home);
+  Key(*w, Qt::Key_N);
+  EXPECT_EQ(w->playback()->frame(), suggested[0].first);
+  const Labels three(alone.begin(), alone.begin() + 3);
+  for (const auto& [frame, code] : three) {
+    // N (next open suggestion) until the cursor is on it, then one Enter.
+    for (int n = 0; n < 10 && w->playback()->frame() < frame; ++n) Key(*w, Qt::Key_N);
+    ASSERT_EQ(w->playback()->frame(), frame) << code;
+    Key(*w, Qt::Key_Return);
+  }
+  EXPECT_EQ(ModelLabels(s), three);
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !s.HasUnsavedEdits(); }, kWaitMs));
+  Labels stored;
+  for (const LabelTier& t : Corpus::Open(corpus_).LoadTiers(take))
+    if (t.name == "accepted_keys")
+      for (const Label& l : t.labels) stored.emplace_back(static_cast<int>(std::lround(l.start_s * rate)), l.text);
+  EXPECT_EQ(stored, three);
 }
 
 // The demo corpus's take (the virtual cuer's first sentence): its `keys` tier
