@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <map>
+#include <utility>
 
 #include "analysis/cleaning/filter.h"
 #include "core/error.h"
@@ -59,18 +62,21 @@ std::vector<SuggestedTarget> SuggestTargetsFromSpeed(const Eigen::VectorXd& spee
   const auto frames = static_cast<int64_t>(speed.size());
   std::vector<SuggestedTarget> out;
   out.reserve(expected_s.size());
-  for (double t : expected_s) {
+  // Pass 1: every key's candidate minima in its window, nearest first.
+  std::vector<std::vector<std::pair<double, int64_t>>> candidates(expected_s.size());
+  for (size_t k = 0; k < expected_s.size(); ++k) {
+    const double t = expected_s[k];
     if (!std::isfinite(t)) throw InvalidInput("target suggestion: an expected time is not a finite number");
     SuggestedTarget s;
     s.expected_s = t;
     s.time_s = kNaN;
     s.speed_mm_s = kNaN;
     s.offset_s = kNaN;
+    out.push_back(s);
     const auto lo = std::max<int64_t>(1, static_cast<int64_t>(std::floor((t - options.search_s) * rate_hz)));
     const auto hi = std::min<int64_t>(frames - 2, static_cast<int64_t>(std::ceil((t + options.search_s) * rate_hz)));
     if (hi < lo) {
-      s.why = "the search window is outside the take";
-      out.push_back(s);
+      out[k].why = "the search window is outside the take";
       continue;
     }
     double peak = 0;
@@ -81,13 +87,10 @@ std::vector<SuggestedTarget> SuggestTargetsFromSpeed(const Eigen::VectorXd& spee
         ++valid;
       }
     if (valid == 0) {
-      s.why = "no valid samples in the search window";
-      out.push_back(s);
+      out[k].why = "no valid samples in the search window";
       continue;
     }
     const double ceiling = std::min(peak * (1 - options.min_dip_fraction), peak - options.min_dip_mm_s);
-    int64_t best = -1;
-    double best_distance = std::numeric_limits<double>::infinity();
     for (int64_t f = lo; f <= hi; ++f) {
       const double v = speed(f);
       if (!std::isfinite(v) || v > ceiling) continue;
@@ -95,23 +98,46 @@ std::vector<SuggestedTarget> SuggestTargetsFromSpeed(const Eigen::VectorXd& spee
       const double before = speed(f - 1), after = speed(f + 1);
       const bool left_ok = !std::isfinite(before) || before > v;
       const bool right_ok = !std::isfinite(after) || after >= v;
-      if (!left_ok || !right_ok) continue;
-      const double distance = std::abs(static_cast<double>(f) / rate_hz - t);
-      if (distance < best_distance) {
-        best_distance = distance;
-        best = f;
-      }
+      if (left_ok && right_ok) candidates[k].emplace_back(std::abs(static_cast<double>(f) / rate_hz - t), f);
     }
+    std::sort(candidates[k].begin(), candidates[k].end());
+    if (candidates[k].empty()) out[k].why = "the hand does not slow down near the expected time";
+  }
+  // Pass 2: successive keys have successive targets. Keys are served from the
+  // one whose minimum lies nearest its expected time on; each takes its
+  // nearest minimum that keeps the suggested frames strictly increasing in
+  // the order of the expected times (two keys whose windows overlap never get
+  // the same minimum).
+  std::vector<size_t> by_time(expected_s.size()), rank(expected_s.size());
+  for (size_t k = 0; k < by_time.size(); ++k) by_time[k] = k;
+  std::stable_sort(by_time.begin(), by_time.end(), [&](size_t a, size_t b) { return expected_s[a] < expected_s[b]; });
+  for (size_t r = 0; r < by_time.size(); ++r) rank[by_time[r]] = r;
+  std::vector<size_t> by_confidence;
+  for (size_t k = 0; k < candidates.size(); ++k)
+    if (!candidates[k].empty()) by_confidence.push_back(k);
+  std::stable_sort(by_confidence.begin(), by_confidence.end(),
+                   [&](size_t a, size_t b) { return candidates[a].front().first < candidates[b].front().first; });
+  std::map<size_t, int64_t> taken;  // rank -> frame
+  for (size_t k : by_confidence) {
+    auto next = taken.upper_bound(rank[k]);
+    const int64_t above = next == taken.end() ? std::numeric_limits<int64_t>::max() : next->second;
+    const int64_t below = next == taken.begin() ? -1 : std::prev(next)->second;
+    int64_t best = -1;
+    for (const auto& [distance, f] : candidates[k])
+      if (f > below && f < above) {
+        best = f;
+        break;
+      }
     if (best < 0) {
-      s.why = "the hand does not slow down near the expected time";
-      out.push_back(s);
+      out[k].why = "its speed minima are the targets of the neighbouring keys";
       continue;
     }
+    taken[rank[k]] = best;
+    SuggestedTarget& s = out[k];
     s.frame = best;
     s.time_s = static_cast<double>(best) / rate_hz;
     s.speed_mm_s = speed(best);
-    s.offset_s = s.time_s - t;
-    out.push_back(s);
+    s.offset_s = s.time_s - s.expected_s;
   }
   return out;
 }

@@ -41,8 +41,11 @@ struct SuggestedTarget {
 Eigen::VectorXd FeatureSpeed(const Eigen::MatrixXd& series, double rate_hz, double cutoff_hz);
 
 // One suggestion per expected time (seconds from the first frame, in any
-// order). Throws InvalidInput for bad options, a non-positive rate or a
-// non-finite expected time.
+// order). Successive keys get strictly increasing frames in the order of their
+// expected times: when windows overlap, the key expected nearest to a minimum
+// keeps it and the other takes its next-nearest minimum that keeps the order,
+// or none ("its speed minima are the targets of the neighbouring keys"). Throws InvalidInput for bad options, a
+// non-positive rate or a non-finite expected time.
 std::vector<SuggestedTarget> SuggestTargets(const Eigen::MatrixXd& series, double rate_hz,
                                             const std::vector<double>& expected_s,
                                             const TargetSuggestionOptions& options = {});

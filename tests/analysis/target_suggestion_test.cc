@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -97,6 +98,40 @@ TEST(TargetSuggestion, BackToBackMovementsRestAtTheTarget) {
       // The last target is followed by stillness: any frame after it is at rest.
       EXPECT_GE(suggestions[k].time_s, t.targets[k] - 2.0 / 120);
     }
+  }
+}
+
+// Two keys whose windows hold the same speed minimum do not both get it: the
+// key expected nearer to it keeps it, the other takes its next minimum in
+// time order, or none (with the reason) when its neighbours hold them all.
+// The result does not depend on the order of the expected times.
+TEST(TargetSuggestion, SuccessiveKeysNeverShareATargetAndKeepTheirOrder) {
+  const Trajectory t = MakeTrajectory(120, 6, 0.3, 0.3, 0.2, 11);  // back to back: minima at the targets only
+  const double t1 = t.targets[2], t2 = t.targets[3];
+  TargetSuggestionOptions wide;
+  wide.search_s = 0.2;  // the second key's window holds t1 (0.12 s away) and t2 (0.18 s away)
+  {
+    const auto s = SuggestTargets(t.series, 120, {t1 - 0.01, t1 + 0.12}, wide);
+    ASSERT_GE(s[0].frame, 0) << s[0].why;
+    ASSERT_GE(s[1].frame, 0) << s[1].why;
+    EXPECT_NEAR(s[0].time_s, t1, 2.0 / 120);
+    EXPECT_NEAR(s[1].time_s, t2, 2.0 / 120);  // nearest alone would be t1 again
+    // Each alone, the second key takes t1: the rule above is what moved it.
+    EXPECT_NEAR(SuggestTargets(t.series, 120, {t1 + 0.12}, wide)[0].time_s, t1, 2.0 / 120);
+  }
+  for (bool reversed : {false, true}) {
+    std::vector<double> expected{t1 - 0.01, t1 + 0.12, t2 + 0.005};
+    if (reversed) std::reverse(expected.begin(), expected.end());
+    const auto s = SuggestTargets(t.series, 120, expected, wide);
+    ASSERT_EQ(s.size(), 3u);
+    const SuggestedTarget& a = s[reversed ? 2 : 0];
+    const SuggestedTarget& b = s[1];
+    const SuggestedTarget& c = s[reversed ? 0 : 2];
+    EXPECT_DOUBLE_EQ(a.expected_s, t1 - 0.01);
+    EXPECT_NEAR(a.time_s, t1, 2.0 / 120) << reversed;
+    EXPECT_NEAR(c.time_s, t2, 2.0 / 120) << reversed;
+    EXPECT_EQ(b.frame, -1) << reversed;  // squeezed between its neighbours' targets
+    EXPECT_NE(b.why.find("neighbouring keys"), std::string::npos) << b.why;
   }
 }
 

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "analysis/keys/hand_features.h"
 #include "core/error.h"
@@ -151,33 +153,65 @@ json KeysSuggest(const KeysSuggestOptions& options, Progress& progress) {
     json shape_missing = json::array(), placement_missing = json::array();
     std::vector<double> shape_offsets, placement_offsets;
     std::vector<std::pair<double, std::string>> shape_points, placement_points;
-    int64_t n_keys = 0;
+    // The keys asked for (the leading rest is not: the hand rests from the
+    // start). A component that changes from the previous key moves to a new
+    // target: those are suggested together, one call per speed series, so
+    // that two successive changes never get the same speed minimum
+    // (analysis/target_suggestion.h). A held component (same shape, or same
+    // placement, as the previous key) has no movement of its own; it is
+    // suggested alone, as before. Shape targets on the shape speed; placement
+    // targets on the index tip's speed for shapes 1 and 6, else the middle tip's.
+    std::vector<size_t> asked;
     bool cued_seen = false;
     for (size_t k = 0; k < cued.keys.size(); ++k) {
+      if (cued.keys[k].type != KeyType::kRest) cued_seen = true;
+      if (cued_seen) asked.push_back(k);
+    }
+    const int64_t n_keys = static_cast<int64_t>(asked.size());
+    enum Series { kShape, kIndex, kMiddle };
+    std::vector<double> moved_times[3];
+    std::vector<std::pair<int, long>> shape_slot(asked.size()),
+        placement_slot(asked.size());  // (series, position or -1)
+    for (size_t i = 0; i < asked.size(); ++i) {
+      const size_t k = asked[i];
       const Key& key = cued.keys[k];
-      if (key.type != KeyType::kRest) cued_seen = true;
-      if (!cued_seen) continue;  // the leading rest: the hand rests from the start
-      ++n_keys;
+      const bool shape_moves = k == 0 || key.shape != cued.keys[k - 1].shape;
+      const bool placement_moves = k == 0 || key.placement != cued.keys[k - 1].placement;
+      const int finger = key.shape == 1 || key.shape == 6 ? kIndex : kMiddle;
+      shape_slot[i] = {kShape, shape_moves ? static_cast<long>(moved_times[kShape].size()) : -1L};
+      if (shape_moves) moved_times[kShape].push_back(timing[k].shape_target_s);
+      placement_slot[i] = {finger, placement_moves ? static_cast<long>(moved_times[finger].size()) : -1L};
+      if (placement_moves) moved_times[finger].push_back(timing[k].placement_target_s);
+    }
+    const Eigen::VectorXd* speeds[3] = {&shape_speed, &index_speed, &middle_speed};
+    std::vector<analysis::SuggestedTarget> moved[3];
+    for (int series = 0; series < 3; ++series)
+      moved[series] = analysis::SuggestTargetsFromSpeed(*speeds[series], rate, moved_times[series], options.suggest);
+    auto suggestion = [&](const std::pair<int, long>& slot, double expected_s) {
+      if (slot.second >= 0) return moved[slot.first][static_cast<size_t>(slot.second)];
+      return analysis::SuggestTargetsFromSpeed(*speeds[slot.first], rate, {expected_s}, options.suggest)[0];
+    };
+    for (size_t i = 0; i < asked.size(); ++i) {
+      const size_t k = asked[i];
+      const Key& key = cued.keys[k];
       const std::string code = key.Code();
-      const auto s = analysis::SuggestTargetsFromSpeed(shape_speed, rate, {timing[k].shape_target_s}, options.suggest);
-      const bool index = key.shape == 1 || key.shape == 6;
-      const auto p = analysis::SuggestTargetsFromSpeed(index ? index_speed : middle_speed, rate,
-                                                       {timing[k].placement_target_s}, options.suggest);
-      if (s[0].frame >= 0) {
-        shape_tier.labels.push_back({s[0].time_s, s[0].time_s, code});
-        shape_offsets.push_back(s[0].offset_s);
-        shape_points.emplace_back(s[0].time_s, code);
+      const analysis::SuggestedTarget s = suggestion(shape_slot[i], timing[k].shape_target_s);
+      const analysis::SuggestedTarget p = suggestion(placement_slot[i], timing[k].placement_target_s);
+      if (s.frame >= 0) {
+        shape_tier.labels.push_back({s.time_s, s.time_s, code});
+        shape_offsets.push_back(s.offset_s);
+        shape_points.emplace_back(s.time_s, code);
       } else {
         shape_missing.push_back(
-            {{"key", k}, {"code", code}, {"expected_s", Round(s[0].expected_s, 1e-3)}, {"why", s[0].why}});
+            {{"key", k}, {"code", code}, {"expected_s", Round(s.expected_s, 1e-3)}, {"why", s.why}});
       }
-      if (p[0].frame >= 0) {
-        placement_tier.labels.push_back({p[0].time_s, p[0].time_s, code});
-        placement_offsets.push_back(p[0].offset_s);
-        placement_points.emplace_back(p[0].time_s, code);
+      if (p.frame >= 0) {
+        placement_tier.labels.push_back({p.time_s, p.time_s, code});
+        placement_offsets.push_back(p.offset_s);
+        placement_points.emplace_back(p.time_s, code);
       } else {
         placement_missing.push_back(
-            {{"key", k}, {"code", code}, {"expected_s", Round(p[0].expected_s, 1e-3)}, {"why", p[0].why}});
+            {{"key", k}, {"code", code}, {"expected_s", Round(p.expected_s, 1e-3)}, {"why", p.why}});
       }
     }
     all_keys += n_keys;
