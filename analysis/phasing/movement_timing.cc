@@ -50,6 +50,7 @@ class GestureFit {
           if (finite_(f, j)) g.rows.push_back(f);
         groups_.push_back(std::move(g));
       }
+      for (MaskGroup& g : groups_) g.x = x_(g.rows, g.dims);
     }
   }
 
@@ -95,21 +96,26 @@ class GestureFit {
     const Eigen::Index c = a.cols(), d = x_.cols();
     const double ridge = 1e-9 * static_cast<double>(t_.size());
     Eigen::MatrixXd beta(c, d);
+    // The matrices are small (about a hundred frames by a few columns):
+    // coefficient-based products (lazyProduct) skip the packing and the
+    // scratch buffers of Eigen's blocked GEMM, which dominated this function.
     if (complete_) {
-      Eigen::MatrixXd g = a.transpose() * a;
+      Eigen::MatrixXd g = a.transpose().lazyProduct(a);
       g.diagonal().array() += ridge;
-      beta = g.ldlt().solve(a.transpose() * x_);
+      const Eigen::MatrixXd atx = a.transpose().lazyProduct(x_);
+      beta = g.ldlt().solve(atx);
     } else {
       for (const MaskGroup& group : groups_) {
         const Eigen::MatrixXd ag = a(group.rows, Eigen::all);
-        Eigen::MatrixXd g = ag.transpose() * ag;
+        Eigen::MatrixXd g = ag.transpose().lazyProduct(ag);
         g.diagonal().array() += ridge;
-        const Eigen::MatrixXd b = g.ldlt().solve(ag.transpose() * x_(group.rows, group.dims));
+        const Eigen::MatrixXd atx = ag.transpose().lazyProduct(group.x);
+        const Eigen::MatrixXd b = g.ldlt().solve(atx);
         for (size_t i = 0; i < group.dims.size(); ++i) beta.col(group.dims[i]) = b.col(static_cast<Eigen::Index>(i));
       }
     }
     if (residual) {
-      const Eigen::MatrixXd r = x_ - a * beta;
+      const Eigen::MatrixXd r = x_ - a.lazyProduct(beta);
       residual->resize(count_);
       Eigen::Index i = 0;
       for (Eigen::Index j = 0; j < d; ++j)
@@ -141,6 +147,7 @@ class GestureFit {
   int64_t count_ = 0;
   struct MaskGroup {
     std::vector<Eigen::Index> dims, rows;  // dimensions with one finite pattern, and its finite frames
+    Eigen::MatrixXd x;                     // the samples of those dimensions at those frames
   };
   std::vector<MaskGroup> groups_;
 };
