@@ -16,11 +16,16 @@ function(csw_add_library name)
   csw_set_warnings(${name})
 endfunction()
 
-# csw_add_test(MODULE NAME SOURCES ... DEPS ... [COST SECONDS]): a GoogleTest program whose
-# tests are registered with ctest as MODULE.Suite.Test, so `ctest -R io.` runs
-# one module.
+# csw_add_test(MODULE NAME SOURCES ... DEPS ... [COST SECONDS] [WHOLE_SUITES SUITE ...]):
+# a GoogleTest program whose tests are registered with ctest as
+# MODULE.Suite.Test, so `ctest -R io.` runs one module.
+# WHOLE_SUITES: suites whose tests share one costly SetUpTestSuite fixture (a
+# simulated corpus with its models and recogniser): each is registered as one
+# ctest entry, MODULE.Suite, running the suite's tests in one process, so the
+# fixture is built once rather than once per test (under the sanitizers that
+# fixture takes 30-60 s).
 function(csw_add_test module name)
-  cmake_parse_arguments(ARG "" "COST" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "COST" "SOURCES;DEPS;WHOLE_SUITES" ${ARGN})
   set(target test_${module}_${name})
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} csw_testing GTest::gtest GTest::gtest_main)
@@ -28,11 +33,23 @@ function(csw_add_test module name)
   # Paths to ../shared/data and the source tree are compiled into csw_testing.
   # COST: ctest -j starts the costliest tests first (a fresh checkout has no
   # timings of its own yet), so that the long acceptance runs do not start last.
-  if(ARG_COST)
-    gtest_discover_tests(${target} TEST_PREFIX "${module}." DISCOVERY_TIMEOUT 60 PROPERTIES COST ${ARG_COST})
-  else()
-    gtest_discover_tests(${target} TEST_PREFIX "${module}." DISCOVERY_TIMEOUT 60)
+  set(_discover TEST_PREFIX "${module}." DISCOVERY_TIMEOUT 60)
+  if(ARG_WHOLE_SUITES)
+    set(_whole "")
+    foreach(_suite IN LISTS ARG_WHOLE_SUITES)
+      add_test(NAME ${module}.${_suite} COMMAND ${target} --gtest_filter=${_suite}.*)
+      if(ARG_COST)
+        set_tests_properties(${module}.${_suite} PROPERTIES COST ${ARG_COST})
+      endif()
+      list(APPEND _whole "${_suite}.*")
+    endforeach()
+    list(JOIN _whole ":" _whole)
+    list(APPEND _discover TEST_FILTER "-${_whole}")
   endif()
+  if(ARG_COST)
+    list(APPEND _discover PROPERTIES COST ${ARG_COST})
+  endif()
+  gtest_discover_tests(${target} ${_discover})
 endfunction()
 
 # csw_path_constants(TARGET MACRO VALUE [MACRO VALUE ...]): absolute paths of

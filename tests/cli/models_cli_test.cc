@@ -56,11 +56,10 @@ double Mean(const json& stats) { return stats.at("mean_mm").get<double>(); }
 // docs/models.md before issue 13 on the default layout (face 0.322 mm, hand
 // 1.362 mm) and within 10 % of those on lab2. Measured (docs/models.md): default
 // face hidden p99.9 0.90 / max 1.10 mm, hand 2.43 / 6.51 mm; lab2 face
-// 0.98 / 1.71 mm, hand 3.06 / 8.14 mm. Under the sanitizers: the default
-// layout only, 4 sentences (2 for training), code paths only.
+// 0.98 / 1.71 mm, hand 3.06 / 8.14 mm. Not run under the sanitizers (below).
 void HiddenWorstCases(const std::string& layout) {
   testing::TempDir dir;
-  const int sentences = testing::kSanitized ? 4 : 18, training = testing::kSanitized ? 2 : 6;
+  const int sentences = 18, training = 6;
   const fs::path sim = dir / "sim";
   ASSERT_EQ(
       Csw("simulate sentences --count " + std::to_string(sentences) + " --seed 7 --layout " + layout + " -o " + Q(sim),
@@ -103,12 +102,11 @@ void HiddenWorstCases(const std::string& layout) {
     std::printf("%s %s: hidden mean %.3f p99 %.2f p99.9 %.2f max %.2f mm; visible held-out %.3f mm\n", layout.c_str(),
                 kind, Mean(hidden), hidden["p99_mm"].get<double>(), hidden["p99_9_mm"].get<double>(),
                 hidden["max_mm"].get<double>(), Mean(inv[kind]["held_out"]["visible"]));
-    if (testing::kSanitized) continue;
     EXPECT_LE(hidden["p99_9_mm"].get<double>(), 5.0);
     EXPECT_LE(hidden["max_mm"].get<double>(), 15.0);
     EXPECT_LE(Mean(inv[kind]["held_out"]["visible"]), held_out_limit.at(kind));
   }
-  if (layout == "lab2" && !testing::kSanitized) {
+  if (layout == "lab2") {
     // The larynx markers follow the head's translation fully: weight 1 and a
     // rotation offset (face_model.h); the default layout's blend keeps none.
     for (const auto& t : face["face"]["throat"]) {
@@ -119,9 +117,15 @@ void HiddenWorstCases(const std::string& layout) {
   }
 }
 
-TEST(CliModels, HiddenSamplesWorstCasesDefaultLayout) { HiddenWorstCases("default"); }
+// Under the sanitizers both layouts are skipped (3.5-4 minutes each there, on
+// 4 sentences): the fits, `csw invert --hide` and its hidden-sample statistics
+// run under ASan in CliModels.FramesCsvAndWorstFramesFindKnownBadFrames and the
+// other fit tests below; the limits are checked in the plain build.
+TEST(CliModels, HiddenSamplesWorstCasesDefaultLayout) {
+  if (testing::kSanitized) GTEST_SKIP() << "the default layout's limits are checked in the plain build";
+  HiddenWorstCases("default");
+}
 TEST(CliModels, HiddenSamplesWorstCasesLab2Layout) {
-  // Under the sanitizers the default layout runs the same code paths (about 4 minutes there).
   if (testing::kSanitized) GTEST_SKIP() << "the lab2 layout's limits are checked in the plain build";
   HiddenWorstCases("lab2");
 }
