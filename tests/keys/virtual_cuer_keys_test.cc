@@ -20,6 +20,7 @@
 #include "analysis/keys/key_timing.h"
 #include "core/error.h"
 #include "core/labels.h"
+#include "datasets/motion.h"
 #include "datasets/virtual_cuer.h"
 #include "models/gaussian_fill.h"
 #include "models/rigid_motion.h"
@@ -165,6 +166,26 @@ MarkerArray ModelFill(const PalmFrames& pf, const GaussianFill& fill, const Mark
   return out;
 }
 
+// A key's component counts as only approached when, at its target time, the
+// hand has already made more than this share of the component's next change.
+constexpr double kApproachedShare = 0.1;
+
+// The share of the next change of a component (shape or placement) made by
+// the key's target time: s((t_k - start_j) / (target_j - start_j)) for the
+// next key j whose component differs (0 when none does).
+double NextMoveShareAtTarget(const std::vector<GestureTruth>& truth, size_t k, bool shape) {
+  const double t = shape ? truth[k].timing.shape_target_s : truth[k].timing.placement_target_s;
+  for (size_t j = k + 1; j < truth.size(); ++j) {
+    const bool differs =
+        shape ? truth[j].key.shape != truth[k].key.shape : truth[j].key.placement != truth[k].key.placement;
+    if (!differs) continue;
+    const double start = shape ? truth[j].timing.shape_start_s : truth[j].timing.placement_start_s;
+    const double target = shape ? truth[j].timing.shape_target_s : truth[j].timing.placement_target_s;
+    return target > start ? MinimumJerk((t - start) / (target - start)) : (t >= target ? 1.0 : 0.0);
+  }
+  return 0.0;
+}
+
 struct Scored {
   SimulationResult r;
   std::array<HandFeatures, 3> features;  // spline/DCT-filled take, clean markers, model-filled take
@@ -181,6 +202,7 @@ struct Tally {
   std::vector<double> aligned_error_ms, aligned_shape_error_ms, aligned_placement_error_ms;
   std::vector<double> aligned_error_reached_ms, aligned_error_approached_ms;
   double free_rate = 0, aligned_rate = 0;
+  int approached_keys = 0, strict_approached = 0;  // a component approached; any overlap at all
 };
 
 double Mean(const std::vector<double>& v) {
@@ -212,13 +234,21 @@ Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const H
     const Scored& s = takes[i];
     const double rate = s.r.take.rate_hz;
     const KeyPosteriors post = ScoreFrames(model, s.features[variant]);
-    // Approached keys: the next key's movement of that component starts before
-    // this key's target (overlapping gestures), so the target is not reached.
+    // Approached keys: the gestures are superposed minimum-jerk movements, so
+    // when the next change of a component starts before this key's target,
+    // the hand turns away early. At the target time it is then the share of
+    // the next movement already made away from the key's posture; a key whose
+    // share exceeds kApproachedShare (the hand stays more than a tenth of the
+    // next movement away) is only approached. Counted from the simulator's
+    // truth alone. Also counted: any overlap at all (the strict count).
     const auto& truth = s.r.keys;
     std::vector<bool> shape_approached(truth.size(), false), placement_approached(truth.size(), false);
     for (size_t k = 0; k + 1 < truth.size(); ++k) {
-      shape_approached[k] = truth[k + 1].timing.shape_start_s < truth[k].timing.shape_target_s;
-      placement_approached[k] = truth[k + 1].timing.placement_start_s < truth[k].timing.placement_target_s;
+      shape_approached[k] = NextMoveShareAtTarget(truth, k, true) > kApproachedShare;
+      placement_approached[k] = NextMoveShareAtTarget(truth, k, false) > kApproachedShare;
+      tally.strict_approached += truth[k + 1].timing.shape_start_s < truth[k].timing.shape_target_s ||
+                                 truth[k + 1].timing.placement_start_s < truth[k].timing.placement_target_s;
+      tally.approached_keys += shape_approached[k] || placement_approached[k];
     }
     for (size_t k = 0; k < truth.size(); ++k) {
       const int64_t fs = std::clamp<int64_t>(std::llround(truth[k].timing.shape_target_s * rate), 0, s.r.frames() - 1);
@@ -297,7 +327,9 @@ Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const H
   }
   tally.free_rate = static_cast<double>(tally.free_matches) / tally.free_expected;
   tally.aligned_rate = static_cast<double>(tally.aligned_correct) / tally.aligned_keys;
-  std::cout << name << ": held-out takes " << static_cast<int>(takes.size()) - train << ", targets " << targets
+  std::cout << name << ": held-out takes " << static_cast<int>(takes.size()) - train << ", targets " << targets << " ("
+            << tally.approached_keys << " with a component approached; " << tally.strict_approached
+            << " overlap their next gesture at all)"
             << " (features incomplete at " << incomplete << "; missing per distance, then placement:";
   for (auto m : missing_dim) std::cout << " " << m;
   std::cout << ")\n"
@@ -426,11 +458,20 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
   // before: aligned 0.712,
   // 46.0 ms, sd 79.6, max 533; clean 0.767, 43.4 ms; filled 0.665, 55.7 ms.
   // Before the kinematic target times: aligned 0.10-0.14, 93-104 ms.)
+  // Reached and approached (2026-12-03): a key counts as approached when the
+  // hand has made more than kApproachedShare of a component's next change by
+  // that component's target (before, any overlap at all counted). 73 of the
+  // 236 keys (31 %) are approached, against 108 (46 %) that overlap their next
+  // gesture at all; the issue expected about 10 %. On the 163 reached keys,
+  // model-filled: shape 199/199 = 1.000, placement 182/184 = 0.989, free
+  // decoding 153/163 = 0.939, aligned 139/163 within 40 ms, mean 28.0 ms
+  // (median shape error 2 frames, 17 ms; the mean is the tail's: 15 shape and
+  // 16 placement targets more than 10 frames off).
   // The floors below guard those numbers against regressions.
   EXPECT_GE(model.aligned_rate, 0.75);
-  EXPECT_GE(static_cast<double>(model.free_reached_matches) / model.free_reached, 0.93);  // 122/128 = 0.953
+  EXPECT_GE(static_cast<double>(model.free_reached_matches) / model.free_reached, 0.92);  // 153/163 = 0.939
   EXPECT_LE(Mean(model.aligned_error_ms), 39.0);
-  EXPECT_LE(Mean(model.aligned_error_reached_ms), 28.0);
+  EXPECT_LE(Mean(model.aligned_error_reached_ms), 31.0);  // 28.0 ms
   EXPECT_GE(clean.aligned_rate, 0.78);
   EXPECT_LE(Mean(clean.aligned_error_ms), 38.0);
   EXPECT_GE(filled.aligned_rate, 0.67);
@@ -504,8 +545,9 @@ TEST(VirtualCuerKeys, OtherLabLayoutAndShiftedTiming) {
     return;
   }
   // Measured (seed 1, 15 sentences, 10 scored, 134 keys; docs/analysis.md):
-  // clean markers shape 0.888 (reached 103/103), placement 0.828 (reached
-  // 62/62), free 113/134 (reached keys 59/61), aligned 101/134 = 0.754
+  // clean markers shape 0.888 (reached 103/103; with the approached share
+  // of 2026-12-03, 113/113), placement 0.828 (reached 62/62; now 95/99),
+  // free 113/134 (reached keys 59/61; now 85/90), aligned 101/134 = 0.754
   // within 40 ms, mean 36.1 ms (sd 63.1; reached keys 19.2 ms; before the
   // repeated keys were interpolated: 97/134, 43.4-43.8 ms); spline/DCT-filled
   // raw takes shape 0.657, placement 0.769 (2-marker phalanges: a hidden tip
