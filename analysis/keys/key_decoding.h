@@ -26,6 +26,7 @@
 // within plateau_log of the best log value when it saturates.
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -62,6 +63,13 @@ std::vector<DecodedKey> DecodeFree(const KeyPosteriors& posteriors, double rate_
 struct ExpectedKey {
   int placement = 0;
   int shape = 0;
+  // The key's acoustic onset A1 on the take's clock (seconds from its first
+  // frame) when a phone alignment gave the key: the consonant onset for CV
+  // and lone-consonant keys, the vowel onset for lone-vowel keys
+  // (vowel_anchor). NaN = unknown (rest keys, keys read from a label tier).
+  // Only DecodeAlignedTimed reads it (key_timing.h, "speech anchors").
+  double anchor_s = std::numeric_limits<double>::quiet_NaN();
+  bool vowel_anchor = false;
 };
 // Aligned decoding of an expected sequence. Throws InvalidInput when the
 // sequence is empty or a key is out of range.

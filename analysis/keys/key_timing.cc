@@ -73,7 +73,7 @@ void InterpolateRepeats(std::vector<TimedKey>& keys, double end_s) {
            static_cast<double>(anchors.back() - anchors.front());
   size_t a = 0;
   for (size_t k = 0; k < keys.size(); ++k) {
-    if (keys[k].shape.changes || keys[k].placement.changes) continue;
+    if (keys[k].shape.changes || keys[k].placement.changes || keys[k].target_from_speech) continue;
     while (a + 1 < anchors.size() && anchors[a + 1] < k) ++a;
     if (anchors[a] > k) continue;  // no change before it (the first key always changes)
     const size_t p = anchors[a];
@@ -87,6 +87,73 @@ void InterpolateRepeats(std::vector<TimedKey>& keys, double end_s) {
       t = std::min(end_s, tp + step * static_cast<double>(k - p));
     }
     keys[k].target_s = t;
+  }
+}
+
+// Median and robust spread (1.4826 × the median absolute deviation) of `v`.
+struct Lag {
+  bool known = false;
+  double median = 0.0, spread = 0.0;
+};
+Lag MedianSpread(std::vector<double> v) {
+  Lag out;
+  if (v.empty()) return out;
+  auto median = [](std::vector<double>& x) {
+    const size_t h = x.size() / 2;
+    std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(h), x.end());
+    const double upper = x[h];
+    if (x.size() % 2 == 1) return upper;
+    return 0.5 * (upper + *std::max_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(h)));
+  };
+  out.known = true;
+  out.median = median(v);
+  for (double& x : v) x = std::abs(x - out.median);
+  out.spread = 1.4826 * median(v);
+  return out;
+}
+
+// Speech anchors (key_timing.h): outlying component targets and repeated keys
+// timed from A1 + the take's own lag.
+void AnchorToSpeech(std::vector<TimedKey>& keys, const std::vector<ExpectedKey>& expected,
+                    const KeyTimingOptions& options) {
+  const size_t n = std::min(keys.size(), expected.size());
+  for (const bool shape : {true, false}) {
+    auto timing = [&](size_t k) -> ComponentTiming& { return shape ? keys[k].shape : keys[k].placement; };
+    std::vector<double> lags[2], pooled;  // lags[vowel_anchor]
+    for (size_t k = 0; k < n; ++k)
+      if (std::isfinite(expected[k].anchor_s) && timing(k).changes && std::isfinite(timing(k).target_s)) {
+        lags[expected[k].vowel_anchor ? 1 : 0].push_back(timing(k).target_s - expected[k].anchor_s);
+        pooled.push_back(timing(k).target_s - expected[k].anchor_s);
+      }
+    const auto min_keys = static_cast<size_t>(options.anchor_min_keys);
+    const Lag all = pooled.size() >= min_keys ? MedianSpread(pooled) : Lag{};
+    const Lag group[2] = {lags[0].size() >= min_keys ? MedianSpread(lags[0]) : all,
+                          lags[1].size() >= min_keys ? MedianSpread(lags[1]) : all};
+    for (size_t k = 0; k < n; ++k) {
+      if (!std::isfinite(expected[k].anchor_s)) continue;
+      const Lag& lag = group[expected[k].vowel_anchor ? 1 : 0];
+      if (!lag.known) continue;
+      const double at = expected[k].anchor_s + lag.median;
+      ComponentTiming& c = timing(k);
+      if (c.changes) {
+        if (std::abs(c.target_s - at) <=
+            std::max(options.anchor_outlier_sd * lag.spread, options.anchor_outlier_floor_s))
+          continue;
+        c.target_s = at;
+        c.onset_s = kNaN;
+        c.kinematic = false;
+        c.from_speech = true;
+        // The keys that hold this component keep its (new) target.
+        for (size_t j = k + 1; j < keys.size() && !timing(j).changes; ++j) {
+          const bool changes = timing(j).changes;
+          timing(j) = c;
+          timing(j).changes = changes;
+        }
+      } else if (shape && !keys[k].placement.changes) {
+        keys[k].target_s = at;
+        keys[k].target_from_speech = true;
+      }
+    }
   }
 }
 
@@ -109,6 +176,9 @@ std::string KeyTimingOptions::Check() const {
   if (!(window_margin_s >= 0)) return "window_margin_s must be >= 0";
   if (max_refits < 0) return "max_refits must be >= 0";
   if (refinement_passes < 0) return "refinement_passes must be >= 0";
+  if (!(anchor_outlier_sd > 0)) return "anchor_outlier_sd must be > 0";
+  if (!(anchor_outlier_floor_s >= 0)) return "anchor_outlier_floor_s must be >= 0";
+  if (anchor_min_keys < 1) return "anchor_min_keys must be >= 1";
   return "";
 }
 
@@ -261,10 +331,12 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
     }
   }
   auto frame = [&](double s) { return std::clamp<int64_t>(std::llround(s * rate_hz), 0, n - 1); };
+  if (options.speech_anchors) AnchorToSpeech(out, expected, options);
   for (TimedKey& t : out)
-    t.target_s = t.shape.changes       ? t.shape.target_s
-                 : t.placement.changes ? t.placement.target_s
-                                       : static_cast<double>(t.key.target_frame) / rate_hz;
+    if (!t.target_from_speech)
+      t.target_s = t.shape.changes       ? t.shape.target_s
+                   : t.placement.changes ? t.placement.target_s
+                                         : static_cast<double>(t.key.target_frame) / rate_hz;
   if (options.interpolate_repeats) InterpolateRepeats(out, end_s);
   for (TimedKey& t : out) {
     t.key.shape_target_frame = frame(t.shape.target_s);

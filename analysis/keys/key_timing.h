@@ -34,6 +34,19 @@
 // last change, the take's mean interval between changed keys is added; off:
 // the joint arrival of DecodeAligned, which sits at one end of the repeats'
 // shared stretch, 300 ms off on average on the virtual cuer).
+//
+// Speech anchors (speech_anchors, when the expected keys carry their acoustic
+// onset A1, ExpectedKey::anchor_s): the hand's targets follow the speech at a
+// cuer's own lag (../shared/docs/cued-speech.md, "Timing"), which the take
+// itself measures. For each component, the lag of its changing targets from
+// their A1 (median over the take's keys, separately for vowel-anchored keys
+// and the others when each has at least anchor_min_keys, else pooled) and its
+// spread (1.4826 × the median absolute deviation) are estimated; a target more
+// than max(anchor_outlier_sd × spread, anchor_outlier_floor_s) from A1 + lag
+// (a segment or a fit that landed on a neighbouring movement) is replaced by
+// A1 + lag, and a repeated key takes A1 + the shape lag instead of the
+// interpolation above. Nothing is assumed about the lag itself: another
+// cuer's or lab's timing gives other lags. Without anchors, as before.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -49,13 +62,17 @@ struct KeyTimingOptions {
   DecodeOptions decode;
   phasing::MovementFitOptions shape_fit = ShapeFitDefaults();
   phasing::MovementFitOptions placement_fit;
-  double arrival_tolerance = 0.05;  // rough target: fraction of the segment's distance range
-  double window_margin_s = 0.1;     // component segments: how far outside their keys' joint segments
-  bool kinematic = true;            // false: rough targets only
-  int max_refits = 3;               // refits around a fitted target that hit its tolerance
-  int refinement_passes = 0;        // refits with the neighbours' fitted targets
-  bool interpolate_repeats = true;  // repeated keys: target interpolated between their neighbours'
-  std::string Check() const;        // "" when valid, else the reason
+  double arrival_tolerance = 0.05;       // rough target: fraction of the segment's distance range
+  double window_margin_s = 0.1;          // component segments: how far outside their keys' joint segments
+  bool kinematic = true;                 // false: rough targets only
+  int max_refits = 3;                    // refits around a fitted target that hit its tolerance
+  int refinement_passes = 0;             // refits with the neighbours' fitted targets
+  bool interpolate_repeats = true;       // repeated keys: target interpolated between their neighbours'
+  bool speech_anchors = true;            // use ExpectedKey::anchor_s where given (see above)
+  double anchor_outlier_sd = 3.0;        // a target further than this many spreads from A1 + lag is an outlier
+  double anchor_outlier_floor_s = 0.08;  // ... and further than this
+  int anchor_min_keys = 3;               // changing targets needed to estimate a lag
+  std::string Check() const;             // "" when valid, else the reason
   static phasing::MovementFitOptions ShapeFitDefaults();
 };
 
@@ -67,12 +84,14 @@ struct ComponentTiming {
   int64_t rough_frame = 0;                     // arrival in that segment
   double onset_s = 0.0;                        // movement onset (NaN unless kinematic)
   double target_s = 0.0;                       // target time: kinematic, else rough
+  bool from_speech = false;                    // target replaced by A1 + lag (speech anchors)
 };
 
 struct TimedKey {
   DecodedKey key;  // segment from DecodeAligned; target frames = rounded times below
   ComponentTiming shape, placement;
   double target_s = 0.0;
+  bool target_from_speech = false;  // a repeated key timed by its A1 + the shape lag
 };
 
 // Aligned decoding with kinematic target times. Times are seconds from the

@@ -102,6 +102,9 @@ TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
   const json sr = KeysScore(s, progress);
   ASSERT_EQ(sr["takes"].size(), 2u);
   EXPECT_EQ(sr["takes"][0]["scores_written"], "keys");
+  // The simulated phones give the labelled keys their A1 (speech anchors).
+  EXPECT_EQ(sr["takes"][0]["speech_anchors"], true);
+  EXPECT_EQ(sr["takes"][1]["speech_anchors"], true);
   const Corpus c = Corpus::Open(fx.corpus);
   int64_t expected = 0;
   for (const char* name : {"s4", "s5"}) {

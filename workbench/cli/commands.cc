@@ -564,6 +564,11 @@ class KeysCommand : public Command {
         ->capture_default_str();
     score_->add_option("--markerset", score_options_.markerset,
                        "Marker-set JSON; default the one each take was imported with");
+    score_
+        ->add_option("--phones", score_options_.phones,
+                     "Phone tier whose keys anchor the aligned target times to the speech when they match the "
+                     "labels (\"\" = never)")
+        ->capture_default_str();
     score_->add_option("--min-key", score_options_.decode.min_key_ms, "Free decoding: shortest key (ms)")
         ->capture_default_str();
     score_->add_flag("--dry-run", score_options_.dry_run, "Report only: write no tier nor scores");

@@ -15,6 +15,7 @@
 #include "core/markerset.h"
 #include "io/corpus/corpus.h"
 #include "io/models/model_file.h"
+#include "synth/phone_symbols.h"
 #include "workbench/jobs/figures.h"
 #include "workbench/jobs/job_util.h"
 #include "workbench/jobs/take_data.h"
@@ -242,6 +243,32 @@ std::string KeysTrainText(const json& r) {
   return o.str();
 }
 
+namespace {
+
+// The keys of the take's phone tier (LfPC, rests first and last) give the
+// labelled keys their A1 when the two code sequences are the same; false (no
+// anchors) when the tier is absent or empty or its keys differ from the labels.
+// A phone tier that cannot be read throws, naming it.
+bool AttachSpeechAnchors(const Take& take, const std::string& tier_name, const std::string& where,
+                         std::vector<keys::ExpectedKey>& expected) {
+  if (tier_name.empty()) return false;
+  const LabelTier* tier = FindTier(take.tiers, tier_name);
+  if (tier == nullptr || tier->labels.empty()) return false;
+  const CuedTier cued = CuePhoneTier(*tier, PhoneSymbols::kAuto, where + ": tier '" + tier_name + "'");
+  if (cued.keys.size() != expected.size()) return false;
+  for (size_t k = 0; k < expected.size(); ++k)
+    if (cued.keys[k].placement != expected[k].placement || cued.keys[k].shape != expected[k].shape) return false;
+  for (size_t k = 0; k < expected.size(); ++k) {
+    const Key& key = cued.keys[k];
+    if (key.type == KeyType::kRest) continue;
+    expected[k].anchor_s = key.a1_s;
+    expected[k].vowel_anchor = key.type == KeyType::kVowelAlone;
+  }
+  return true;
+}
+
+}  // namespace
+
 json KeysScore(const KeysScoreOptions& options, Progress& progress) {
   if (const std::string why = options.Check(); !why.empty()) throw UsageError(why);
   const ModelFile mf = LoadModelFile(options.keys);
@@ -311,6 +338,7 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
         expected.push_back(code.Text());
         expected_keys.push_back({code.placement, code.shape});
       }
+      tj["speech_anchors"] = AttachSpeechAnchors(take, options.phones, where, expected_keys);
       for (size_t k = 0; k < labels.placement_frames.size(); ++k)
         tp.Add(labels.placements[k], ArgMax(post.placement, labels.placement_frames[k]));
       shape.Add(ts);

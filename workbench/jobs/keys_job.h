@@ -62,6 +62,11 @@ struct KeysScoreOptions {
   std::string tier = "keys";                         // label tier scored against, when present
   std::string placement_tier = "placement_targets";  // placement targets, when present (else `tier`)
   std::string markerset;
+  // Phone tier, when present: its keys (LfPC rules, phone symbols detected)
+  // give each labelled key its acoustic onset A1 when they match the label
+  // tier's codes, and the aligned decoding's targets are checked against the
+  // speech (analysis/keys/key_timing.h, "speech anchors"). "" = never.
+  std::string phones = "phones";
   keys::DecodeOptions decode;
   bool dry_run = false;  // report only, write no tier nor scores
   std::string figures;   // folder for the confusion-matrix figures; "" = none
@@ -73,7 +78,8 @@ struct KeysScoreOptions {
 nlohmann::json KeysTrain(const KeysTrainOptions& options, Progress& progress);
 std::string KeysTrainText(const nlohmann::json& result);
 
-// {"corpus", "keys", "takes": [{"take", "frames", "decoded_keys", "tiers_written", "scores_written", ...}],
+// {"corpus", "keys", "takes": [{"take", "frames", "decoded_keys", "tiers_written", "scores_written",
+//   "speech_anchors" (true when the phone tier's keys matched the labels), ...}],
 //  "shape": {"accuracy", "count", "confusion"}, "placement": {...},
 //  "sequence": {"free": {"keys_correct", "keys_expected", "insertions", "deletions", "substitutions"},
 //               "aligned": {"keys_correct", "keys_expected", "target_error_ms": {"mean", "sd"}}}}
