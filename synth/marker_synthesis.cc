@@ -1,5 +1,6 @@
 #include "synth/marker_synthesis.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -90,6 +91,95 @@ Take MarkersFromParameters(const FaceModel& face, const HandModel& hand, const P
     }
   }
   return take;
+}
+
+namespace {
+
+// Largest jump of any marker visible in frames f - 1 and f (0 when none).
+double MaxJump(const MarkerArray& m, int64_t f) {
+  double best = 0.0;
+  for (int64_t j = 0; j < m.markers(); ++j) {
+    if (!m.Visible(f - 1, j) || !m.Visible(f, j)) continue;
+    const float* a = m.at(f - 1, j);
+    const float* b = m.at(f, j);
+    const double dx = double(b[0]) - a[0], dy = double(b[1]) - a[1], dz = double(b[2]) - a[2];
+    best = std::max(best, std::sqrt(dx * dx + dy * dy + dz * dz));
+  }
+  return best;
+}
+
+bool RowsFinite(const ParameterTracks& t, int64_t f) {
+  return t.face_params.row(f).allFinite() && t.head_pose.row(f).allFinite() && t.hand_params.row(f).allFinite() &&
+         t.forearm_in_head.row(f).allFinite();
+}
+
+}  // namespace
+
+SpeedLimitResult LimitMarkerSpeed(const FaceModel& face, const HandModel& hand, double limit_mm, int max_passes,
+                                  ParameterTracks* tracks, Take* take) {
+  if (!(limit_mm > 0) || !std::isfinite(limit_mm))
+    throw InvalidInput("synthesised take '" + take->name + "': the speed limit must be a positive number of mm");
+  SpeedLimitResult r;
+  const int64_t n = tracks->frames();
+  if (take->markers.frames() != n)
+    throw InvalidInput("synthesised take '" + take->name + "': " + std::to_string(take->markers.frames()) +
+                       " marker frames for " + std::to_string(n) + " track rows");
+  std::vector<double> jump(static_cast<size_t>(std::max<int64_t>(n, 1)), 0.0);
+  for (int64_t f = 1; f < n; ++f) jump[static_cast<size_t>(f)] = MaxJump(take->markers, f);
+  r.max_jump_before_mm = r.max_jump_after_mm = *std::max_element(jump.begin(), jump.end());
+  for (int pass = 0; pass < max_passes; ++pass) {
+    // Frames to smooth: both ends of every transition above the limit, when
+    // they and their neighbours have finite tracks.
+    std::vector<char> smooth(static_cast<size_t>(n), 0);
+    bool any = false;
+    for (int64_t f = 1; f < n; ++f) {
+      if (jump[static_cast<size_t>(f)] <= limit_mm) continue;
+      for (int64_t g : {f - 1, f})
+        if (g >= 1 && g + 1 < n && RowsFinite(*tracks, g - 1) && RowsFinite(*tracks, g) && RowsFinite(*tracks, g + 1)) {
+          smooth[static_cast<size_t>(g)] = 1;
+          any = true;
+        }
+    }
+    if (!any) break;
+    const ParameterTracks before = *tracks;
+    int64_t lo = n, hi = -1;
+    for (int64_t g = 1; g + 1 < n; ++g) {
+      if (!smooth[static_cast<size_t>(g)]) continue;
+      auto blend = [&](const Eigen::MatrixXd& from, Eigen::MatrixXd& to) {
+        to.row(g) = 0.25 * from.row(g - 1) + 0.5 * from.row(g) + 0.25 * from.row(g + 1);
+      };
+      blend(before.face_params, tracks->face_params);
+      blend(before.head_pose, tracks->head_pose);
+      blend(before.hand_params, tracks->hand_params);
+      blend(before.forearm_in_head, tracks->forearm_in_head);
+      ++r.smoothings;
+      lo = std::min(lo, g);
+      hi = std::max(hi, g);
+    }
+    ++r.passes;
+    // Recompute the markers of the smoothed frames (rows lo..hi), then the
+    // jumps next to them.
+    ParameterTracks part;
+    part.rate_hz = tracks->rate_hz;
+    const Eigen::Index rows = static_cast<Eigen::Index>(hi - lo + 1);
+    part.face_params = tracks->face_params.middleRows(lo, rows);
+    part.head_pose = tracks->head_pose.middleRows(lo, rows);
+    part.hand_params = tracks->hand_params.middleRows(lo, rows);
+    part.forearm_in_head = tracks->forearm_in_head.middleRows(lo, rows);
+    const Take redone = MarkersFromParameters(face, hand, part, take->name);
+    for (int64_t g = lo; g <= hi; ++g) {
+      if (!smooth[static_cast<size_t>(g)]) continue;
+      for (int64_t j = 0; j < take->markers.markers(); ++j) {
+        const float* src = redone.markers.at(g - lo, j);
+        float* dst = take->markers.at(g, j);
+        for (int k = 0; k < 3; ++k) dst[k] = src[k];
+      }
+    }
+    for (int64_t g = std::max<int64_t>(1, lo); g <= std::min(n - 1, hi + 1); ++g)
+      jump[static_cast<size_t>(g)] = MaxJump(take->markers, g);
+    r.max_jump_after_mm = *std::max_element(jump.begin(), jump.end());
+  }
+  return r;
 }
 
 }  // namespace csw

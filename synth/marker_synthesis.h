@@ -58,4 +58,26 @@ std::vector<std::string> SynthesisMarkerNames(const FaceModel& face, const HandM
 Take MarkersFromParameters(const FaceModel& face, const HandModel& hand, const ParameterTracks& tracks,
                            const std::string& take_name);
 
+// Speed limit: no marker of `take` (MarkersFromParameters of `tracks`) may
+// move more than limit_mm between two frames — the fastest the corpus's cuer
+// ever moved, so that a unit squeezed into a short slot does not outrun the
+// cuer. Each pass finds the frame transitions where some marker moves
+// further, smooths every track at their two frames with the kernel
+// [1 2 1] / 4 (the transition's jump becomes the mean of its neighbours',
+// weighted 1 2 1; the movement is spread over more frames, its end points,
+// the keys' targets, untouched unless the transition is next to them) and
+// recomputes those frames' markers; it stops when no jump exceeds the limit
+// or after max_passes. Frames with NaN tracks and their neighbours are left
+// alone. Returns the number of frame smoothings made (0 = nothing was above
+// the limit). Throws InvalidInput as MarkersFromParameters, or when limit_mm
+// is not positive.
+struct SpeedLimitResult {
+  int smoothings = 0;  // frames smoothed, over all passes
+  int passes = 0;      // passes that smoothed something
+  double max_jump_before_mm = 0;
+  double max_jump_after_mm = 0;
+};
+SpeedLimitResult LimitMarkerSpeed(const FaceModel& face, const HandModel& hand, double limit_mm, int max_passes,
+                                  ParameterTracks* tracks, Take* take);
+
 }  // namespace csw

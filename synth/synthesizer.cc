@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "core/error.h"
 #include "models/face_model.h"
@@ -49,6 +50,9 @@ std::string SynthesisOptions::Check() const {
     return "the output frame rate must be >= 0 (0 = the dictionary's)";
   ConcatOptions c = concat;
   if (c.rate_hz == 0) c.rate_hz = 100;  // checked with a stand-in rate
+  if (!(max_jump_factor >= 0) || !std::isfinite(max_jump_factor))
+    return "max_jump_factor must be >= 0 (0 = no speed limit)";
+  if (speed_limit_passes < 0) return "speed_limit_passes must be >= 0";
   return c.Check();
 }
 
@@ -108,6 +112,23 @@ Synthesis Synthesize(const Utterance& utterance, const Dictionary& dictionary, c
   s.tracks.forearm_in_head = s.hand.forearm_in_head;
   s.take = MarkersFromParameters(face, hand, s.tracks, name);
   s.take.first_frame = 1;
+  const double corpus_rate = std::isfinite(dictionary.corpus_rate_hz) && dictionary.corpus_rate_hz > 0
+                                 ? dictionary.corpus_rate_hz
+                                 : dictionary.dikeys.front().rate_hz;
+  if (options.max_jump_factor > 0 && std::isfinite(dictionary.corpus_max_jump_mm) &&
+      dictionary.corpus_max_jump_mm > 0 && corpus_rate > 0) {
+    s.speed_limit_mm = options.max_jump_factor * dictionary.corpus_max_jump_mm * corpus_rate / rate;
+    s.speed_limit = LimitMarkerSpeed(face, hand, s.speed_limit_mm, options.speed_limit_passes, &s.tracks, &s.take);
+    s.take.first_frame = 1;
+    if (s.speed_limit.max_jump_after_mm > s.speed_limit_mm) {
+      char line[200];
+      std::snprintf(line, sizeof line,
+                    "a marker still moves %.1f mm between two frames after the speed limit (%.1f mm): the tracks "
+                    "jump next to a gap or at an end",
+                    s.speed_limit.max_jump_after_mm, s.speed_limit_mm);
+      s.warnings.push_back(line);
+    }
+  }
 
   // Tiers.
   const double end_s = static_cast<double>(frames - 1) / rate;

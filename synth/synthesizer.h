@@ -38,6 +38,13 @@ struct SynthesisOptions {
     c.selection_weight = 10;
     return c;
   }();
+  // Speed limit (LimitMarkerSpeed, synth/marker_synthesis.h): no marker
+  // moves further between two frames than max_jump_factor × the largest
+  // jump of the corpus's markers (Dictionary::corpus_max_jump_mm, scaled from
+  // the corpus's frame rate to the output's); 0 = no limit, or when the
+  // dictionary has no corpus measure. At most speed_limit_passes passes.
+  double max_jump_factor = 1.0;
+  int speed_limit_passes = 200;
   std::string Check() const;  // "" or the reason
 };
 
@@ -46,8 +53,10 @@ struct Synthesis {
   std::vector<Phone> phones;             // the utterance's phones on the output clock (lead-in added)
   std::vector<PhoneTarget> face_phones;  // what the face track was built for (pauses "_" at both ends)
   HandTrack hand;                        // dikeys: hand parameters, forearm in head, head pose
-  FaceTrack face;          // diphones: face parameters (zeros = the mean face when the dictionary has none)
-  ParameterTracks tracks;  // the tracks the markers come from
+  FaceTrack face;                // diphones: face parameters (zeros = the mean face when the dictionary has none)
+  ParameterTracks tracks;        // the tracks the markers come from (after the speed limit)
+  SpeedLimitResult speed_limit;  // what the speed limit did (nothing when off)
+  double speed_limit_mm = 0;     // the limit applied (0 = none)
   // Every model marker at the output rate, its tiers: "words", "phones"
   // (IPA, pauses "_"), "keys" (point tier: each key's target, code "PS"),
   // "placement_targets" (the same times), "expected_keys" (interval tier:

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -249,6 +250,65 @@ TEST_F(MarkerSynthesis, BadTracksAreRejectedNamingTheTake) {
   t = fx.Tracks();
   t.forearm_in_head = t.forearm_in_head.topRows(3).eval();
   expect_error(t, "forearm in head 3×6");
+}
+
+// Largest frame-to-frame jump of any marker.
+double MaxMarkerJump(const MarkerArray& m) {
+  std::vector<double> jumps;
+  dict::AppendMarkerJumps(m, &jumps);
+  return jumps.empty() ? 0.0 : *std::max_element(jumps.begin(), jumps.end());
+}
+
+TEST_F(MarkerSynthesis, SpeedLimitSpreadsAFastMovementAndKeepsItsEnds) {
+  ASSERT_NE(fixture_, nullptr);
+  const Fixture& fx = *fixture_;
+  const FaceModel& face = *fx.models.face;
+  const HandModel& hand = *fx.models.hand;
+  ParameterTracks t = fx.Tracks();
+  const int64_t n = t.frames();
+  ASSERT_GE(n, 120);
+  // A still cuer (every row the take's middle one), whose forearm then moves
+  // 60 mm sideways (in the head frame) in 4 frames from frame a and stays
+  // there: 15 mm per frame, against a limit of 5 mm.
+  const int64_t a = n / 2;
+  for (Eigen::MatrixXd* m : {&t.face_params, &t.head_pose, &t.hand_params, &t.forearm_in_head}) {
+    const Eigen::RowVectorXd row = m->row(a);
+    ASSERT_TRUE(row.allFinite());
+    m->rowwise() = row;
+  }
+  const double limit = 5.0;
+  for (int64_t f = a + 1; f < n; ++f) t.forearm_in_head(f, 3) += 60.0 * std::min<double>(1.0, (f - a) / 4.0);
+  Take take = MarkersFromParameters(face, hand, t, "fast");
+  const ParameterTracks unlimited = t;
+  ASSERT_GT(MaxMarkerJump(take.markers), limit + 5.0);
+  const SpeedLimitResult r = LimitMarkerSpeed(face, hand, limit, 500, &t, &take);
+  EXPECT_GT(r.smoothings, 0);
+  EXPECT_NEAR(r.max_jump_before_mm, MaxMarkerJump(MarkersFromParameters(face, hand, unlimited, "x").markers), 1e-9);
+  // No marker moves further than the limit, and the markers are those of the
+  // smoothed tracks.
+  EXPECT_LE(MaxMarkerJump(take.markers), limit + 1e-6);
+  EXPECT_NEAR(r.max_jump_after_mm, MaxMarkerJump(take.markers), 1e-9);
+  const Take again = MarkersFromParameters(face, hand, t, "fast");
+  for (int64_t f = 0; f < n; ++f)
+    for (int64_t j = 0; j < take.markers.markers(); ++j)
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(take.markers.at(f, j)[k], again.markers.at(f, j)[k]) << f << " " << j;
+  // Only the frames around the fast movement changed (60 mm at 5 mm per frame
+  // needs 12 frames: the smoothing spreads it over at most 30 each side), and
+  // the movement still goes the whole 60 mm.
+  int64_t first = n, last = -1;
+  for (int64_t f = 0; f < n; ++f)
+    if (t.forearm_in_head.row(f) != unlimited.forearm_in_head.row(f) ||
+        t.hand_params.row(f) != unlimited.hand_params.row(f)) {
+      first = std::min(first, f);
+      last = std::max(last, f);
+    }
+  EXPECT_GE(first, a - 30);
+  EXPECT_LE(last, a + 4 + 30);
+  const int64_t after = std::min(n - 1, a + 4 + 31);
+  EXPECT_NEAR(t.forearm_in_head(after, 3) - t.forearm_in_head(a - 31, 3),
+              unlimited.forearm_in_head(after, 3) - unlimited.forearm_in_head(a - 31, 3), 1e-9);
+
+  EXPECT_THROW(LimitMarkerSpeed(face, hand, 0.0, 10, &t, &take), InvalidInput);
 }
 
 }  // namespace

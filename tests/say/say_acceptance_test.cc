@@ -12,10 +12,12 @@
 //     this corpus reads only ~80 % of the corpus's own keys (side placement
 //     taken for the chin), so the bar is the recogniser's, not the
 //     synthesizer's; measured 80.9 % (synthesised) against 85.8 %;
-//   - p99 of the frame-to-frame marker jumps <= 1.1 x the corpus's p99 (the
-//     issue's bar) and the maximum <= 1.4 x the corpus's maximum (the issue
-//     asks for 1.0: measured 1.28, the fastest corpus movements made a bit
-//     faster where a slot is shorter than its unit);
+//   - p99 of the frame-to-frame marker jumps <= 1.1 x the corpus's p99 and
+//     the maximum <= the corpus's maximum (the issue's bars; measured 16.9 mm
+//     against 15.4 mm, and 33.8 mm against 34.0 mm: the synthesizer's speed
+//     limit, synth/marker_synthesis.h LimitMarkerSpeed, spreads the movements
+//     that a short slot made faster than the corpus's fastest; 43.6 mm = 1.28
+//     x without it);
 //   - CV placement and shape targets (kinematic, relative to A1) within 20 ms
 //     of the corpus's means (per-dikey phasing; the issue's bar).
 #include <gtest/gtest.h>
@@ -145,7 +147,7 @@ TEST(SayAcceptance, ThirtyUnseenSentencesFromTheCoverageCorpus) {
   EXPECT_GE(check["keys"]["accuracy"].get<double>(), 0.7);
   const json& c = check["continuity"];
   EXPECT_LE(c["p99_jump_mm"].get<double>(), 1.1 * c["corpus_p99_jump_mm"].get<double>());
-  EXPECT_LE(c["max_jump_mm"].get<double>(), 1.4 * c["corpus_max_jump_mm"].get<double>());
+  EXPECT_LE(c["max_jump_mm"].get<double>(), c["corpus_max_jump_mm"].get<double>());
   // Every key was synthesised from whole dikeys or the seed's fallback.
   EXPECT_EQ(r["fallback"]["interpolated"], 0);
   const json& cv = check["timing"]["CV"];

@@ -209,6 +209,13 @@ TEST_F(SayJob, SynthesisesACorpusSentenceFromWholeDikeys) {
   EXPECT_EQ(s["fallback"]["interpolated"], 0);
   // At least 90 % of the keys recognised at their targets (a key model trained on 3 sentences).
   EXPECT_GE(r["check"]["keys"]["accuracy"].get<double>(), 0.9) << r["check"].dump() << "\n" << s.dump();
+  // The speed limit: the corpus's largest jump (same frame rate), which the
+  // synthesised markers do not exceed.
+  ASSERT_TRUE(s["speed_limit"]["limit_mm"].is_number()) << s["speed_limit"].dump();
+  EXPECT_NEAR(s["speed_limit"]["limit_mm"].get<double>(), r["check"]["continuity"]["corpus_max_jump_mm"].get<double>(),
+              1e-9);
+  EXPECT_LE(r["check"]["continuity"]["max_jump_mm"].get<double>(), s["speed_limit"]["limit_mm"].get<double>() + 1e-6);
+  EXPECT_LE(s["speed_limit"]["max_jump_after_mm"].get<double>(), s["speed_limit"]["limit_mm"].get<double>() + 1e-6);
 
   // Files read back: the C3D holds every model marker, one frame per
   // 1 / rate; the WAV and the video last as long (± 1 frame).

@@ -218,6 +218,11 @@ json Say(const SayOptions& options, Progress& progress) {
                {"fallback", LevelCounts(sentence_levels)},
                {"key_plan", key_list},
                {"files", files},
+               {"speed_limit",
+                {{"limit_mm", s.speed_limit_mm > 0 ? json(s.speed_limit_mm) : json()},
+                 {"smoothed_frames", s.speed_limit.smoothings},
+                 {"max_jump_before_mm", s.speed_limit.max_jump_before_mm},
+                 {"max_jump_after_mm", s.speed_limit.max_jump_after_mm}}},
                {"warnings", s.warnings}};
 
     if (key_model) {
