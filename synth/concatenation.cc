@@ -281,6 +281,7 @@ std::string ConcatOptions::Check() const {
   if (!(rate_hz > 0) || !std::isfinite(rate_hz)) return "rate_hz must be positive";
   if (!(selection_weight >= 0) || !std::isfinite(selection_weight)) return "selection_weight must be >= 0";
   if (!(concatenation_weight >= 0) || !std::isfinite(concatenation_weight)) return "concatenation_weight must be >= 0";
+  if (!(target_weight >= 0) || !std::isfinite(target_weight)) return "target_weight must be >= 0";
   if (hand_weights.size() && !(hand_weights.allFinite() && hand_weights.minCoeff() >= 0))
     return "hand_weights must be finite and >= 0";
   if (face_weights.size() && !(face_weights.allFinite() && face_weights.minCoeff() >= 0))
@@ -455,9 +456,49 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
     }
   }
 
+  // Target cost: RMS standardised distances from the key classes' means, the
+  // hand parameters (weighted as the joins) for the shape and the
+  // forearm-in-head pose for the placement.
+  Eigen::VectorXd shape_factor(P), pose_factor(6);
+  {
+    ColumnSpread s;
+    double n = 0;
+    for (const DikeyUnit& u : d.dikeys) {
+      s.Add(u.hand_params, 0);
+      s.Add(u.forearm_in_head, P);
+      n += static_cast<double>(u.frames());
+    }
+    Eigen::VectorXd ws(P + 6);
+    ws << Weights(o.hand_weights, P, "hand_weights"), Eigen::VectorXd::Zero(6);
+    shape_factor = JumpFactors(s, n, ws).head(P);
+    ws.head(P).setZero();
+    ws.tail(6).setOnes();
+    pose_factor = JumpFactors(s, n, ws).tail(6);
+  }
+  auto atypical = [&](const Eigen::RowVectorXd& v, const KeyCode& k) {
+    double cost = 0;
+    if (classes.shape.count(k.shape))
+      cost +=
+          (shape_factor.transpose().array() * (v.head(P) - classes.shape.at(k.shape).Value()).array()).matrix().norm();
+    if (classes.placement.count(k.placement))
+      cost += (pose_factor.transpose().array() *
+               (v.segment(P, 6) - classes.placement.at(k.placement).Value().head(6)).array())
+                  .matrix()
+                  .norm();
+    return cost;
+  };
   std::vector<std::vector<double>> local(slots);
-  for (size_t i = 0; i < slots; ++i)
-    for (const DikeyCandidate& c : cands[i]) local[i].push_back(o.selection_weight * c.selection);
+  for (size_t i = 0; i < slots; ++i) {
+    for (const DikeyCandidate& c : cands[i]) {
+      double cost = o.selection_weight * c.selection;
+      if (o.target_weight > 0) {
+        double t = atypical(c.first, keys[i].code);
+        if (i + 1 == slots) t += atypical(c.end, keys[i + 1].code);
+        cost += o.target_weight * t;
+      }
+      local[i].push_back(cost);
+    }
+  }
   HandTrack out;
   const std::vector<int> path = Viterbi(
       local,

@@ -39,6 +39,16 @@ struct ConcatOptions {
   // has one per hand parameter (forearm-in-head and head pose columns weigh
   // 1 each), face_weights one per face parameter; empty = all 1.
   Eigen::VectorXd hand_weights, face_weights;
+  // Target cost weight × how far from its key class a candidate puts the
+  // hand at the key it leaves (the posture the rendered track holds at that
+  // key's target: the smoothing moves the previous unit's end onto it) and,
+  // for the last slot, at the key it reaches: the RMS standardised distance
+  // of the hand parameters from the shape's mean plus that of the
+  // forearm-in-head pose from the placement's mean, both means over every
+  // unit's key instants. A unit cut where the cuer only approached a key
+  // (fast syllables) is then chosen only when nothing better is there.
+  // 0 = off (the seed's costs alone).
+  double target_weight = 0.0;
   bool smoothing = true;  // anticipatory smoothing of every boundary jump
   // Highest fallback level allowed (FallbackLevel, 0-3); a slot that needs a
   // higher one throws InvalidInput.

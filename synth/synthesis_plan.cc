@@ -173,11 +173,44 @@ SynthesisPlan PlanKeys(const std::vector<Key>& keys, const std::vector<Phone>& p
     const double median = d != durations.end() ? Median(d->second) : all_median;
     return std::max(options.min_interval_s, std::isfinite(median) ? options.min_slot_fraction * median : 0.0);
   };
-  for (size_t i = 1; i < cued.size(); ++i) {
-    const double earliest = cued[i - 1].target_s + shortest_slot(cued[i - 1].code, cued[i].code);
-    if (cued[i].target_s < earliest) {
-      cued[i].target_s = earliest;
-      cued[i].source += "+pushed";
+  if (options.least_squares_spacing && cued.size() > 1) {
+    // Minimise Σ (t_k − d_k)² subject to t_{k+1} − t_k ≥ g_k: with
+    // c_k = Σ_{j<k} g_j and s_k = t_k − c_k the constraint is s
+    // non-decreasing, an isotonic regression of d_k − c_k (pool adjacent
+    // violators: blocks of equal s at their members' mean).
+    const size_t n = cued.size();
+    std::vector<double> offset(n, 0.0);
+    for (size_t i = 1; i < n; ++i) offset[i] = offset[i - 1] + shortest_slot(cued[i - 1].code, cued[i].code);
+    struct Block {
+      double sum;
+      size_t count;
+      double Value() const { return sum / static_cast<double>(count); }
+    };
+    std::vector<Block> blocks;
+    for (size_t i = 0; i < n; ++i) {
+      blocks.push_back({cued[i].target_s - offset[i], 1});
+      while (blocks.size() > 1 && blocks[blocks.size() - 2].Value() > blocks.back().Value()) {
+        blocks[blocks.size() - 2].sum += blocks.back().sum;
+        blocks[blocks.size() - 2].count += blocks.back().count;
+        blocks.pop_back();
+      }
+    }
+    size_t i = 0;
+    for (const Block& b : blocks) {
+      for (size_t m = 0; m < b.count; ++m, ++i) {
+        const double t = b.Value() + offset[i];
+        if (t > cued[i].target_s + 1e-9) cued[i].source += "+pushed";
+        if (t < cued[i].target_s - 1e-9) cued[i].source += "+advanced";
+        cued[i].target_s = t;
+      }
+    }
+  } else {
+    for (size_t i = 1; i < cued.size(); ++i) {
+      const double earliest = cued[i - 1].target_s + shortest_slot(cued[i - 1].code, cued[i].code);
+      if (cued[i].target_s < earliest) {
+        cued[i].target_s = earliest;
+        cued[i].source += "+pushed";
+      }
     }
   }
 

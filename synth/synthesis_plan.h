@@ -11,8 +11,8 @@
 //     the mean over the units arriving at the same key code, then the global
 //     rule.
 // Two successive targets are at least min_interval_s apart and at least
-// min_slot_fraction of the succession's median unit duration (later targets
-// are pushed).
+// min_slot_fraction of the succession's median unit duration (the targets
+// moved as little as possible, in the least-squares sense, to keep every gap).
 // The rest keys at both ends are placed one typical movement (the median
 // duration of the dictionary's units leaving / reaching rest) before the first
 // target and after the last; when the first would fall before time 0, the
@@ -69,6 +69,13 @@ struct PlanOptions {
   // than the corpus ever took makes the hand jump. Later targets are pushed
   // ("+pushed"). 0 = only min_interval_s.
   double min_slot_fraction = 0.6;
+  // How targets are spaced when a slot is too short. true: every target is
+  // moved as little as possible (least squares over the utterance, by
+  // pool-adjacent-violators) so that all the gaps hold; a short slot opens
+  // on both sides, the earlier key "+advanced", the later "+pushed", and
+  // the targets keep their phasing on average. false: each later target is
+  // pushed (all late).
+  bool least_squares_spacing = true;
   std::string Check() const;
 };
 

@@ -219,6 +219,45 @@ TEST(ConcatenateDikeys, ChoosesTheContinuousCandidateWhenDurationsTie) {
   EXPECT_NEAR(t.total_cost, 0.0, 1e-9);
 }
 
+TEST(ConcatenateDikeys, TargetCostLeavesOutUnitsCutAtAnApproachedKey) {
+  // One take where key 12 was only approached: its 00 -> 12 unit (A) ends,
+  // and its 12 -> 35 unit (B) starts, 0.8 above shape 2's value in hand
+  // parameter 1; both last exactly their slots. Typical units C, D (0.05 s
+  // off their slots), G, and E, F (not needed here) reach every class value.
+  DikeyUnit a = Dikey("00", "12", 0.30);
+  for (Eigen::Index r = 0; r < a.frames(); ++r)
+    a.hand_params(r, 0) += 0.8 * static_cast<double>(r) / static_cast<double>(a.frames() - 1);
+  const Dictionary d =
+      DikeyDictionary({a, Dikey("12", "35", 0.30, 0.8), Dikey("00", "12", 0.25), Dikey("12", "35", 0.25),
+                       Dikey("35", "00", 0.40), Dikey("35", "12", 0.3), Dikey("12", "00", 0.3)});
+  const auto keys = Keys({{"00", 0.2}, {"12", 0.5}, {"35", 0.8}, {"00", 1.2}});
+  // Without the target cost the seed's costs pick A, B: no mismatch, no jump.
+  const HandTrack seed = ConcatenateDikeys(d, keys, 1.5);
+  EXPECT_EQ(seed.keys[0].units, std::vector<int>{0});
+  EXPECT_EQ(seed.keys[1].units, std::vector<int>{1});
+  EXPECT_NEAR(seed.total_cost, 0.0, kTol);
+  // Shape 2's mean over the six instants of key 12 (A's end, B's start, C's
+  // end, D's start, E's end, F's start) is 0.8 x 2 / 6 above its value: B
+  // starts 0.8 - 0.267 from it, D 0.267. The cost is the RMS over the three
+  // hand parameters of that distance / the column's sd, times the weight;
+  // placements, rests and shape 5 are exact everywhere.
+  ConcatOptions o;
+  o.target_weight = 10;
+  const HandTrack t = ConcatenateDikeys(d, keys, 1.5, o);
+  EXPECT_EQ(t.keys[0].units, std::vector<int>{2});
+  EXPECT_EQ(t.keys[1].units, std::vector<int>{3});
+  EXPECT_EQ(t.keys[2].units, std::vector<int>{4});
+  const double sigma0 = ColumnSigma(AllDikeyRows(d))(0);
+  const double mean_offset = 0.8 * 2.0 / 6.0;
+  EXPECT_NEAR(t.total_cost, 0.05 + 0.05 + 10 * std::sqrt(1.0 / 3.0) * mean_offset / sigma0, 1e-9);
+  // The key 12 is held at its class value (D's first row), not 0.8 above.
+  EXPECT_NEAR(t.hand_params(Frame(0.5), 0), ShapeValue(2)(0), kTol);
+  EXPECT_NEAR(seed.hand_params(Frame(0.5), 0), ShapeValue(2)(0) + 0.8, kTol);
+  o.target_weight = -1;
+  EXPECT_THAT([&] { ConcatenateDikeys(d, keys, 1.5, o); },
+              ::testing::ThrowsMessage<InvalidInput>(HasSubstr("target_weight must be >= 0")));
+}
+
 TEST(ConcatenateDikeys, ConcatenationCostIsTheWeightedRmsOfTheNormalisedJump) {
   // Only the discontinuous candidate: the path's cost is its one jump, 0.8 in
   // hand parameter 1, divided by that column's standard deviation over every

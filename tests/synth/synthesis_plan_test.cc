@@ -118,12 +118,45 @@ TEST(SynthesisPlan, TargetsArePushedApartByTheMinimumInterval) {
   o.shrinkage_units = 0;    // each succession's own mean (shrinkage: its own test)
   o.min_slot_fraction = 0;  // min_interval_s only (slots: their own test)
   o.min_interval_s = 0.05;
+  o.least_squares_spacing = false;  // later targets pushed
   const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
   EXPECT_NEAR(plan.keys[1].target_s, 0.8, 1e-12);
   EXPECT_NEAR(plan.keys[2].target_s, 0.85, 1e-12);  // pushed from 0.75
   EXPECT_EQ(plan.keys[2].source, "global+pushed");
   EXPECT_NEAR(plan.keys[3].target_s, 0.90, 1e-12);  // 0.90 already 0.05 after
   for (size_t i = 1; i < plan.keys.size(); ++i) EXPECT_GT(plan.keys[i].target_s, plan.keys[i - 1].target_s);
+}
+
+TEST(SynthesisPlan, LeastSquaresSpacingOpensAShortSlotOnBothSides) {
+  // As above: wanted 0.80, 0.75, 0.90 with gaps of at least 0.05 s. The
+  // targets closest to those in the least-squares sense are 0.75, 0.80,
+  // 0.90 (each of the first two moved 0.05: Σ squares 0.005, against 0.01
+  // for pushing the second alone to 0.85); the third keeps its time.
+  const std::vector<Phone> phones = Phones();
+  const std::vector<Key> keys = CueKeys(phones);
+  Dictionary d;
+  d.dikeys.push_back(Unit(KeyCode{}, KeyCode{keys[1].placement, keys[1].shape}, 0.3, 0.3));
+  PlanOptions o;
+  o.shrinkage_units = 0;
+  o.min_slot_fraction = 0;
+  o.min_interval_s = 0.05;
+  ASSERT_TRUE(o.least_squares_spacing);  // the default
+  const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
+  EXPECT_NEAR(plan.keys[1].target_s, 0.75, 1e-12);
+  EXPECT_EQ(plan.keys[1].source, "dikey+advanced");
+  EXPECT_NEAR(plan.keys[2].target_s, 0.80, 1e-12);
+  EXPECT_EQ(plan.keys[2].source, "global+pushed");
+  EXPECT_NEAR(plan.keys[3].target_s, 0.90, 1e-12);
+  EXPECT_EQ(plan.keys[3].source, "global");
+  // Two targets wanted at the same time, 0.75 (the CV key at A1 0.5 +
+  // 0.25, the lone vowel at its onset): 0.725 and 0.775, the gap opened
+  // around the time they share.
+  Dictionary same;
+  same.dikeys.push_back(Unit(KeyCode{}, KeyCode{keys[1].placement, keys[1].shape}, 0.3, 0.25));
+  const SynthesisPlan chain = PlanKeys(keys, phones, 1.2, same, o);
+  EXPECT_NEAR(chain.keys[1].target_s, 0.725, 1e-12);
+  EXPECT_NEAR(chain.keys[2].target_s, 0.775, 1e-12);
+  EXPECT_NEAR(chain.keys[3].target_s, 0.90, 1e-12);
 }
 
 TEST(SynthesisPlan, SuccessionMeansAreShrunkTowardsTheArrivingCodesMean) {
@@ -157,6 +190,7 @@ TEST(SynthesisPlan, SlotsAreAtLeastAFractionOfTheSuccessionsMedianDuration) {
   PlanOptions o;
   o.rule = PhasingRule::kGlobal;
   o.min_slot_fraction = 0.6;
+  o.least_squares_spacing = false;  // later targets pushed
   const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
   EXPECT_NEAR(plan.keys[1].target_s, 0.55, 1e-12);
   EXPECT_NEAR(plan.keys[2].target_s, 0.85, 1e-12);

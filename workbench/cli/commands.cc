@@ -762,6 +762,10 @@ class SayCommand : public Command {
     sub_->add_option("--concatenation-weight", options_.concatenation_weight,
                      "Unit selection: cost per standardised RMS parameter jump at a join")
         ->capture_default_str();
+    sub_->add_option("--target-weight", options_.target_weight,
+                     "Unit selection: cost per standardised distance of a unit's key postures from their classes' "
+                     "means (0 = off)")
+        ->capture_default_str();
     sub_->add_flag("--no-video", no_video_, "Do not write pointlight.mp4");
     sub_->add_flag("--check", options_.check,
                    "Score the synthesised markers with the key recogniser, measure continuity and timing");

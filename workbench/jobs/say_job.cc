@@ -89,6 +89,7 @@ std::string SayOptions::Check() const {
   if (!(fps >= 1 && fps <= 240)) return "--fps must be in [1, 240]";
   if (!(selection_weight >= 0 && selection_weight < 1e6)) return "--selection-weight must be >= 0";
   if (!(concatenation_weight >= 0 && concatenation_weight < 1e6)) return "--concatenation-weight must be >= 0";
+  if (!(target_weight >= 0 && target_weight < 1e6)) return "--target-weight must be >= 0";
   if (check && keys.empty()) return "--check needs the key model (--keys)";
   if (!corpus_phasing.empty() && !check) return "--corpus-phasing applies with --check";
   return "";
@@ -124,6 +125,7 @@ json Say(const SayOptions& options, Progress& progress) {
   so.concat.rate_hz = options.rate_hz;
   so.concat.selection_weight = options.selection_weight;
   so.concat.concatenation_weight = options.concatenation_weight;
+  so.concat.target_weight = options.target_weight;
   const double mean_phone = dict::MeanPhoneDuration(dictionary);
 
   const fs::path out(options.output);

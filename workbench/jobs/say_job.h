@@ -37,6 +37,7 @@ struct SayOptions {
   double rate_hz = 0;               // output frame rate; 0 = the corpus's
   double selection_weight = 10;     // per s of RMS duration mismatch (ConcatOptions)
   double concatenation_weight = 1;  // per standardised RMS jump (ConcatOptions)
+  double target_weight = 10;        // per standardised distance of a key posture from its class (ConcatOptions)
   bool video = true;                // write pointlight.mp4
   double fps = 25;                  // video frame rate
   bool check = false;               // close the loop (needs keys)
