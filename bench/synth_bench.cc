@@ -5,9 +5,10 @@
 // on them, the dictionaries built from their labelled key tiers; the five
 // first held-out sentences (datasets/unseen_sentences_fr.txt) phonetised by
 // espeak-ng.
-//   BM_Synthesize: phones -> keys -> timing plan -> dikeys and diphones
+//   BM_Synthesize/0: phones -> keys -> timing plan -> dikeys and diphones
 //     selected and concatenated -> every model marker, the five sentences per
 //     iteration; counter "realtime" = seconds of speech per second of CPU.
+//   BM_Synthesize/1: the same with the face from seed-003 fragments.
 //   BM_Phonetise: espeak-ng's phones and audio for the same sentences (not
 //     part of the 50x target: espeak-ng's own cost).
 //   BM_PointLightVideo: the point-light MP4 of the first synthesised sentence
@@ -91,9 +92,12 @@ const Demo& TheDemo() {
   return demo;
 }
 
+// Arg 0: the face from diphones (Viterbi); 1: from seed-003 fragments
+// (greedy longest match, RBF resampling, blended overlaps).
 void BM_Synthesize(benchmark::State& state) {
   const Demo& d = TheDemo();
-  const dict::SynthesisOptions options;
+  dict::SynthesisOptions options;
+  options.face_fragments = state.range(0) == 1;
   int64_t frames = 0;
   for (auto _ : state) {
     for (size_t i = 0; i < d.utterances.size(); ++i) {
@@ -107,7 +111,7 @@ void BM_Synthesize(benchmark::State& state) {
       benchmark::Counter(d.speech_s * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
   state.counters["frames/s"] = benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_Synthesize)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Synthesize)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_Phonetise(benchmark::State& state) {
   const Demo& d = TheDemo();

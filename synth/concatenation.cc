@@ -572,7 +572,9 @@ double UnitBoundary(const DiphoneUnit& u) {
   return std::clamp((u.phone1_end_s - u.start_s) / span, 0.0, 1.0);
 }
 
-void CheckDiphones(const Dictionary& d) {
+}  // namespace
+
+void CheckDiphoneUnits(const Dictionary& d) {
   if (d.diphones.empty()) throw InvalidInput("the dictionary has no diphone units");
   const Eigen::Index q = d.diphones.front().face_params.cols();
   for (size_t i = 0; i < d.diphones.size(); ++i) {
@@ -582,17 +584,14 @@ void CheckDiphones(const Dictionary& d) {
     if (u.frames() < 1 || u.face_params.cols() != q)
       throw InvalidInput(where + ": its face parameters have another size");
     if (!u.face_params.allFinite()) throw InvalidInput(where + ": a value is not finite");
-    if (!std::isfinite(u.start_s) || !std::isfinite(u.end_s) || !std::isfinite(u.phone1_end_s))
+    if (!std::isfinite(u.start_s) || !std::isfinite(u.end_s) || !std::isfinite(u.phone1_end_s) ||
+        !std::isfinite(u.phone1_start_s) || !std::isfinite(u.phone2_start_s) || !std::isfinite(u.phone2_end_s) ||
+        !(u.rate_hz > 0) || !std::isfinite(u.rate_hz))
       throw InvalidInput(where + ": its times are not finite");
   }
 }
 
-}  // namespace
-
-FaceTrack ConcatenateDiphones(const Dictionary& d, const std::vector<PhoneTarget>& phones, double duration_s,
-                              const ConcatOptions& o) {
-  if (const std::string why = o.Check(); !why.empty()) throw InvalidInput(why);
-  CheckDiphones(d);
+std::vector<double> PhoneMiddles(const std::vector<PhoneTarget>& phones, double duration_s) {
   if (phones.size() < 2) throw InvalidInput("need at least two phones, got " + std::to_string(phones.size()));
   std::vector<double> middles;
   for (size_t i = 0; i < phones.size(); ++i) {
@@ -606,9 +605,17 @@ FaceTrack ConcatenateDiphones(const Dictionary& d, const std::vector<PhoneTarget
                          Num(phones[i - 1].end_s) + " s)");
     middles.push_back(0.5 * (p.start_s + p.end_s));
   }
-  if (phones.front().start_s < -1e-9 || phones.back().end_s > duration_s + 1e-6)
+  if (!std::isfinite(duration_s) || phones.front().start_s < -1e-9 || phones.back().end_s > duration_s + 1e-6)
     throw InvalidInput("phones span [" + Num(phones.front().start_s) + ", " + Num(phones.back().end_s) +
                        "] s, outside [0, " + Num(duration_s) + "] s");
+  return middles;
+}
+
+FaceTrack ConcatenateDiphones(const Dictionary& d, const std::vector<PhoneTarget>& phones, double duration_s,
+                              const ConcatOptions& o) {
+  if (const std::string why = o.Check(); !why.empty()) throw InvalidInput(why);
+  CheckDiphoneUnits(d);
+  const std::vector<double> middles = PhoneMiddles(phones, duration_s);
   const std::vector<int64_t> key_frames = KeyFrames(middles, duration_s, o.rate_hz, "phone middle");
 
   const Eigen::Index Q = d.diphones.front().face_params.cols();

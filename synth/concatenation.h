@@ -147,6 +147,15 @@ struct FaceTrack {
 FaceTrack ConcatenateDiphones(const Dictionary& dictionary, const std::vector<PhoneTarget>& phones, double duration_s,
                               const ConcatOptions& options = {});
 
+// Checks a target phone list (at least two, contiguous, each longer than 0,
+// within [0, duration_s]) and returns the phones' middles; throws
+// InvalidInput naming the phone.
+std::vector<double> PhoneMiddles(const std::vector<PhoneTarget>& phones, double duration_s);
+// Throws InvalidInput naming the unit when the dictionary has no diphone, or
+// one whose face parameters have another size, or values or times that are
+// not finite.
+void CheckDiphoneUnits(const Dictionary& dictionary);
+
 // Minimum-jerk blend 10u³ − 15u⁴ + 6u⁵ of u in [0, 1] (0 → 0, 1 → 1, zero
 // velocity and acceleration at both ends).
 double MinimumJerk(double u);

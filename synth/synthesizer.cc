@@ -53,6 +53,11 @@ std::string SynthesisOptions::Check() const {
   if (!(max_jump_factor >= 0) || !std::isfinite(max_jump_factor))
     return "max_jump_factor must be >= 0 (0 = no speed limit)";
   if (speed_limit_passes < 0) return "speed_limit_passes must be >= 0";
+  if (face_fragments) {
+    FragmentOptions f = fragments;
+    f.rate_hz = 100;  // the output rate is the concatenation's
+    if (const std::string why = f.Check(); !why.empty()) return why;
+  }
   return c.Check();
 }
 
@@ -94,7 +99,14 @@ Synthesis Synthesize(const Utterance& utterance, const Dictionary& dictionary, c
   s.face_phones = FacePhones(s.phones, duration);
   const int64_t frames = s.hand.frames();
   if (!dictionary.diphones.empty() && s.face_phones.size() >= 2) {
-    s.face = ConcatenateDiphones(dictionary, s.face_phones, duration, concat);
+    if (options.face_fragments) {
+      FragmentOptions fo = options.fragments;
+      fo.rate_hz = rate;
+      s.fragments = ConcatenateFragments(dictionary, s.face_phones, duration, fo);
+      s.face = ToFaceTrack(s.fragments, s.face_phones);
+    } else {
+      s.face = ConcatenateDiphones(dictionary, s.face_phones, duration, concat);
+    }
   } else {
     s.face.rate_hz = rate;
     s.face.face_params = Eigen::MatrixXd::Zero(frames, face.num_parameters());

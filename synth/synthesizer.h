@@ -14,6 +14,7 @@
 #include "core/take.h"
 #include "synth/concatenation.h"
 #include "synth/dictionary.h"
+#include "synth/fragments.h"
 #include "synth/marker_synthesis.h"
 #include "synth/phonetics.h"
 #include "synth/synthesis_plan.h"
@@ -51,6 +52,11 @@ struct SynthesisOptions {
   // dictionary has no corpus measure. At most speed_limit_passes passes.
   double max_jump_factor = 1.0;
   int speed_limit_passes = 200;
+  // The face from seed-003's fragments (synth/fragments.h: greedy longest
+  // match, phone-aligned warp, RBF resampling, blended overlaps) instead of
+  // the diphone Viterbi; fragments.rate_hz is replaced by the output rate.
+  bool face_fragments = false;
+  FragmentOptions fragments;
   std::string Check() const;  // "" or the reason
 };
 
@@ -60,6 +66,7 @@ struct Synthesis {
   std::vector<PhoneTarget> face_phones;  // what the face track was built for (pauses "_" at both ends)
   HandTrack hand;                        // dikeys: hand parameters, forearm in head, head pose
   FaceTrack face;                // diphones: face parameters (zeros = the mean face when the dictionary has none)
+  FragmentTrack fragments;       // with face_fragments: the fragments the face came from
   ParameterTracks tracks;        // the tracks the markers come from (after the speed limit)
   SpeedLimitResult speed_limit;  // what the speed limit did (nothing when off)
   double speed_limit_mm = 0;     // the limit applied (0 = none)

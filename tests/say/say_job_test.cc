@@ -87,6 +87,18 @@ TEST(SayOptions, RequiredOptionsAndReasons) {
   o = Valid();
   o.corpus_phasing = "p.json";
   EXPECT_EQ(o.Check(), "--corpus-phasing applies with --check");
+  o = Valid();
+  o.target_weight = -1;
+  EXPECT_EQ(o.Check(), "--target-weight must be >= 0");
+  o = Valid();
+  o.face_units = "triphones";
+  EXPECT_EQ(o.Check(), "--face-units must be diphones or fragments");
+  o = Valid();
+  o.resampling = "cubic";
+  EXPECT_EQ(o.Check(), "--resampling must be rbf or linear");
+  o = Valid();
+  o.blend = 2;
+  EXPECT_EQ(o.Check(), "--blend must be in [0, 1]");
 }
 
 TEST(ReadSentences, TrimsSkipsCommentsAndNamesBadLines) {
@@ -137,6 +149,15 @@ TEST(SayText, RendersTheReport) {
             "recognised keys: 3 of 4 (75.0 %)\n"
             "marker jumps: p99 5.50 mm, max 12.25 mm (corpus: p99 6.00 mm, max 20.00 mm)\n"
             "CV targets re A1: placement 12 ms (corpus nan), shape -20 ms (corpus -18)\n");
+  json g = {{"sentences", json::array()},
+            {"fallback", {{"whole", 2}}},
+            {"corpus", "o/synthesis.h5"},
+            {"fragments",
+             {{"count", 4}, {"mean_diphones", 2.25}, {"longest", 5}, {"interpolated", 1}, {"resampling", "rbf"}}}};
+  EXPECT_EQ(SayText(g),
+            "0 sentences; keys reached by whole dikeys 2, closest placement 0, two streams 0, interpolated 0\n"
+            "face from 4 fragments (mean 2.2 diphones, longest 5, 1 interpolated; rbf resampling)\n"
+            "corpus of the synthesised takes: o/synthesis.h5\n");
 }
 
 // Three virtual-cuer sentences, face and hand models, a key model and a
@@ -255,6 +276,47 @@ TEST_F(SayJob, SynthesisesACorpusSentenceFromWholeDikeys) {
   EXPECT_NEAR(frames, wav.duration_s() * 25.0, 1.0);
   EXPECT_TRUE(fs::exists(out / "synthesis.h5"));
   EXPECT_TRUE(fs::exists(out / "say.json"));
+}
+
+TEST_F(SayJob, FragmentsTakeACorpusSentencesFaceFromItsOwnTake) {
+  // Seed-003 fragments for a sentence of the corpus (take s0): its phones
+  // are a run of that take's diphones, so the greedy longest match takes
+  // them in one fragment (measured: 21 diphones). The last diphone, into the
+  // final pause, may be missing from a 3-take dictionary (a unit whose pause
+  // middle lies past the take's last frame is not kept): then it alone is
+  // interpolated.
+  ASSERT_NE(fixture_, nullptr);
+  SayFixture& fx = *fixture_;
+  SayOptions o;
+  o.texts = {ShippedSentences()[0]};
+  o.dict = fx.dictionary;
+  o.models = fx.models;
+  o.video = false;
+  o.face_units = "fragments";
+  o.output = (fx.dir / "say_fragments").string();
+  Progress progress;
+  const json r = Say(o, progress);
+  EXPECT_EQ(r["face_units"], "fragments");
+  EXPECT_EQ(r["fragments"]["resampling"], "rbf");
+  const json& list = r["sentences"][0]["fragments"];
+  ASSERT_GE(list.size(), 1u);
+  EXPECT_EQ(list[0]["take"], "s0");
+  EXPECT_GE(list[0]["diphones"].get<int>(), 20);
+  int covered = 0, interpolated = 0;
+  for (size_t i = 0; i < list.size(); ++i) {
+    const json& f = list[i];
+    covered += f["diphones"].get<int>();
+    if (!f["interpolated"].get<bool>()) continue;
+    ++interpolated;
+    EXPECT_EQ(i + 1, list.size()) << f.dump();
+    const std::string phones = f["phones"];
+    EXPECT_EQ(phones.substr(phones.size() - 2), " _") << f.dump();
+  }
+  EXPECT_LE(interpolated, 1);
+  EXPECT_EQ(r["fragments"]["interpolated"], interpolated);
+  EXPECT_EQ(r["fragments"]["count"], static_cast<int>(list.size()));
+  EXPECT_NEAR(r["fragments"]["mean_diphones"].get<double>(), double(covered) / list.size(), 1e-9);
+  EXPECT_EQ(r["fragments"]["longest"], list[0]["diphones"]);
 }
 
 TEST_F(SayJob, RefusesOtherModelsAndTextsWithoutKeys) {

@@ -766,6 +766,14 @@ class SayCommand : public Command {
                      "Unit selection: cost per standardised distance of a unit's key postures from their classes' "
                      "means (0 = off)")
         ->capture_default_str();
+    sub_->add_option("--face-units", options_.face_units,
+                     "The face from diphones (Viterbi) or fragments (seed-003: greedy longest match, phone-aligned "
+                     "warp, RBF resampling, blended overlaps)")
+        ->capture_default_str();
+    sub_->add_option("--resampling", options_.resampling, "Fragments: rbf (inverse multiquadric) or linear")
+        ->capture_default_str();
+    sub_->add_option("--blend", options_.blend, "Fragments: overlap at each join, fraction of the shared phone (0-1)")
+        ->capture_default_str();
     sub_->add_flag("--no-video", no_video_, "Do not write pointlight.mp4");
     sub_->add_flag("--check", options_.check,
                    "Score the synthesised markers with the key recogniser, measure continuity and timing");

@@ -90,6 +90,9 @@ std::string SayOptions::Check() const {
   if (!(selection_weight >= 0 && selection_weight < 1e6)) return "--selection-weight must be >= 0";
   if (!(concatenation_weight >= 0 && concatenation_weight < 1e6)) return "--concatenation-weight must be >= 0";
   if (!(target_weight >= 0 && target_weight < 1e6)) return "--target-weight must be >= 0";
+  if (face_units != "diphones" && face_units != "fragments") return "--face-units must be diphones or fragments";
+  if (dict::Resampling r; !dict::ParseResampling(resampling, &r)) return "--resampling must be rbf or linear";
+  if (!(blend >= 0 && blend <= 1)) return "--blend must be in [0, 1]";
   if (check && keys.empty()) return "--check needs the key model (--keys)";
   if (!corpus_phasing.empty() && !check) return "--corpus-phasing applies with --check";
   return "";
@@ -126,6 +129,10 @@ json Say(const SayOptions& options, Progress& progress) {
   so.concat.selection_weight = options.selection_weight;
   so.concat.concatenation_weight = options.concatenation_weight;
   so.concat.target_weight = options.target_weight;
+  so.face_fragments = options.face_units == "fragments";
+  dict::ParseResampling(options.resampling, &so.fragments.resampling);
+  so.fragments.blend_fraction = options.blend;
+  so.fragments.align_phones = options.align_phones;
   const double mean_phone = dict::MeanPhoneDuration(dictionary);
 
   const fs::path out(options.output);
@@ -135,8 +142,17 @@ json Say(const SayOptions& options, Progress& progress) {
   fs::remove(corpus_path, ec);  // this command's own output, replaced
   CorpusTransaction tx(corpus_path);
 
-  json result = {{"dict", options.dict},       {"models", options.models}, {"output", options.output},
-                 {"phasing", options.phasing}, {"corpus", corpus_path},    {"sentences", json::array()}};
+  json result = {{"dict", options.dict},
+                 {"models", options.models},
+                 {"output", options.output},
+                 {"phasing", options.phasing},
+                 {"corpus", corpus_path},
+                 {"sentences", json::array()},
+                 {"face_units", options.face_units}};
+  if (so.face_fragments)
+    result["fragments"] = {
+        {"resampling", options.resampling}, {"blend", options.blend}, {"align_phones", options.align_phones}};
+  int fragments_n = 0, fragment_diphones = 0, fragments_interpolated = 0, longest_fragment = 0;
   std::vector<int> levels(4, 0);
   int intended = 0, correct = 0, shape_correct = 0, placement_correct = 0, at_targets_correct = 0;
   int substitutions = 0, insertions = 0, deletions = 0;
@@ -226,6 +242,22 @@ json Say(const SayOptions& options, Progress& progress) {
                  {"max_jump_before_mm", s.speed_limit.max_jump_before_mm},
                  {"max_jump_after_mm", s.speed_limit.max_jump_after_mm}}},
                {"warnings", s.warnings}};
+    if (so.face_fragments) {
+      json fl = json::array();
+      for (const dict::FragmentReport& f : s.fragments.fragments) {
+        fl.push_back({{"take", f.take},
+                      {"phones", f.phones},
+                      {"diphones", f.slots},
+                      {"interpolated", f.interpolated},
+                      {"context_matches", f.context_matches},
+                      {"timing_rms_s", f.timing_rms_s}});
+        ++fragments_n;
+        fragment_diphones += f.slots;
+        fragments_interpolated += f.interpolated ? 1 : 0;
+        longest_fragment = std::max(longest_fragment, f.slots);
+      }
+      sj["fragments"] = fl;
+    }
 
     if (key_model) {
       MarkerBinding binding;
@@ -278,6 +310,12 @@ json Say(const SayOptions& options, Progress& progress) {
   progress.Update("synthesising", 1.0);
   tx.Commit();
   result["rate_hz"] = out_rate;
+  if (so.face_fragments) {
+    result["fragments"]["count"] = fragments_n;
+    result["fragments"]["mean_diphones"] = Number(fragments_n ? double(fragment_diphones) / fragments_n : kNaN);
+    result["fragments"]["longest"] = longest_fragment;
+    result["fragments"]["interpolated"] = fragments_interpolated;
+  }
   result["fallback"] = LevelCounts(levels);
 
   if (options.check) {
@@ -355,6 +393,14 @@ std::string SayText(const json& r) {
                 sentences.size(), f.value("whole", 0), f.value("closest placement", 0), f.value("two streams", 0),
                 f.value("interpolated", 0));
   s += line;
+  if (r.contains("fragments") && r["fragments"].contains("count")) {
+    const auto& g = r["fragments"];
+    std::snprintf(line, sizeof line,
+                  "face from %d fragments (mean %.1f diphones, longest %d, %d interpolated; %s resampling)\n",
+                  g["count"].get<int>(), g["mean_diphones"].is_number() ? g["mean_diphones"].get<double>() : kNaN,
+                  g["longest"].get<int>(), g["interpolated"].get<int>(), g["resampling"].get<std::string>().c_str());
+    s += line;
+  }
   s += "corpus of the synthesised takes: " + r["corpus"].get<std::string>() + "\n";
   if (r.contains("check")) {
     const auto& c = r["check"];
