@@ -225,6 +225,10 @@ struct DikeyCandidate {
   int shape_unit = -1, pose_unit = -1;  // the same unit for levels 0 and 1
   // Fraction of each unit's rows trimmed from its start (ConcatOptions::max_compression).
   double shape_skip = 0, pose_skip = 0;
+  // With ConcatOptions::trim_keeps_key_posture: the untrimmed first row minus
+  // the trimmed one, added as (1 − u) · offset over the slot, so the key
+  // posture is held at its frame and the trimmed movement catches up.
+  Eigen::RowVectorXd key_offset;
   KeyCode used_to;
   double selection = 0;  // RMS duration mismatch (s)
   // Values at u = 0 and 1, and the intended value at the arriving key (= last
@@ -372,6 +376,11 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
         c.used_to = to;
         c.selection = std::abs(mismatch[static_cast<size_t>(j)]);
         c.first = DikeyRow(u, UnitRowAt(u, c.shape_skip, 0));
+        if (o.trim_keeps_key_posture && c.shape_skip > 0) {
+          const Eigen::RowVectorXd untrimmed = DikeyRow(u, 0.0);
+          c.key_offset = untrimmed - c.first;
+          c.first = untrimmed;
+        }
         c.last = DikeyRow(u, static_cast<double>(u.frames() - 1));
         c.end = c.last;
         if (level == FallbackLevel::kClosestPlacement)
@@ -424,6 +433,12 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
           c.pose_skip = TrimFraction(up, target, o.max_compression);
           c.first = DikeyRow(us, UnitRowAt(us, c.shape_skip, 0));
           c.first.tail(12) = DikeyRow(up, UnitRowAt(up, c.pose_skip, 0)).tail(12);
+          if (o.trim_keeps_key_posture && (c.shape_skip > 0 || c.pose_skip > 0)) {
+            Eigen::RowVectorXd untrimmed = DikeyRow(us, 0.0);
+            untrimmed.tail(12) = DikeyRow(up, 0.0).tail(12);
+            c.key_offset = untrimmed - c.first;
+            c.first = untrimmed;
+          }
           c.last = DikeyRow(us, static_cast<double>(us.frames() - 1));
           c.last.tail(12) = DikeyRow(up, static_cast<double>(up.frames() - 1)).tail(12);
           c.end = c.last;
@@ -518,6 +533,7 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
       const DikeyUnit& up = d.dikeys[static_cast<size_t>(c.pose_unit)];
       v.tail(12) = DikeyRow(up, UnitRowAt(up, c.pose_skip, u)).tail(12);
     }
+    if (c.key_offset.size()) v += (1.0 - u) * c.key_offset;
     return v;
   };
   auto first = [&](size_t i) -> Eigen::RowVectorXd { return chosen(i).first; };

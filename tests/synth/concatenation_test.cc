@@ -185,6 +185,18 @@ TEST(ConcatenateDikeys, AUnitMuchLongerThanItsSlotIsTrimmedNotCompressed) {
   };
   EXPECT_NEAR(max_step(squeezed), 3.0 / 40.0, 1e-9);
   EXPECT_NEAR(max_step(t), 1.5 / 40.0, 1e-9);
+  // Keeping the key posture: the trimmed half-ramp starts at key 12 again,
+  // its offset (shape 2 minus the ramp's middle) fading linearly: frame 50
+  // is shape 2, frame 70 the trimmed row (3/4 of the way) plus half the
+  // offset, i.e. halfway, frame 90 shape 5; slot 0 has no jump to spread.
+  o.max_compression = 1.25;
+  o.trim_keeps_key_posture = true;
+  const HandTrack kept = ConcatenateDikeys(d, keys, 1.3, o);
+  EXPECT_LT(MaxAbsDiff(kept.hand_params.row(50), ShapeValue(2)), kTol);
+  EXPECT_LT(MaxAbsDiff(kept.hand_params.row(70), mid), kTol);
+  EXPECT_LT(MaxAbsDiff(kept.hand_params.row(90), ShapeValue(5)), kTol);
+  EXPECT_LT(MaxAbsDiff(kept.hand_params.row(25), 0.5 * (ShapeValue(0) + ShapeValue(2))), kTol);
+  o.trim_keeps_key_posture = false;
   o.max_compression = 0.5;
   EXPECT_THAT([&] { ConcatenateDikeys(d, keys, 1.3, o); },
               ::testing::ThrowsMessage<InvalidInput>(HasSubstr("max_compression must be 0 or >= 1")));

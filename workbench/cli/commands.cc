@@ -766,6 +766,9 @@ class SayCommand : public Command {
                      "Unit selection: cost per standardised distance of a unit's key postures from their classes' "
                      "means (0 = off)")
         ->capture_default_str();
+    sub_->add_flag("--keep-key-postures", options_.keep_key_postures,
+                   "A dikey trimmed to fit a short slot still starts at its key's posture (more keys reached, "
+                   "placement targets earlier; docs/synthesis.md)");
     sub_->add_option("--face-units", options_.face_units,
                      "The face from diphones (Viterbi) or fragments (seed-003: greedy longest match, phone-aligned "
                      "warp, RBF resampling, blended overlaps)")

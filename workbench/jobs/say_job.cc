@@ -129,6 +129,7 @@ json Say(const SayOptions& options, Progress& progress) {
   so.concat.selection_weight = options.selection_weight;
   so.concat.concatenation_weight = options.concatenation_weight;
   so.concat.target_weight = options.target_weight;
+  so.concat.trim_keeps_key_posture = options.keep_key_postures;
   so.face_fragments = options.face_units == "fragments";
   dict::ParseResampling(options.resampling, &so.fragments.resampling);
   so.fragments.blend_fraction = options.blend;
