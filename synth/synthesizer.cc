@@ -104,6 +104,11 @@ Synthesis Synthesize(const Utterance& utterance, const Dictionary& dictionary, c
       fo.rate_hz = rate;
       s.fragments = ConcatenateFragments(dictionary, s.face_phones, duration, fo);
       s.face = ToFaceTrack(s.fragments, s.face_phones);
+      for (const FragmentReport& f : s.fragments.fragments) {
+        if (f.linear_fallback)
+          s.warnings.push_back("face fragment '" + f.phones + "' (take '" + f.take +
+                               "'): the RBF resampling strayed, resampled linearly");
+      }
     } else {
       s.face = ConcatenateDiphones(dictionary, s.face_phones, duration, concat);
     }

@@ -99,6 +99,9 @@ TEST(SayOptions, RequiredOptionsAndReasons) {
   o = Valid();
   o.blend = 2;
   EXPECT_EQ(o.Check(), "--blend must be in [0, 1]");
+  o = Valid();
+  o.rbf_shape = 0;
+  EXPECT_EQ(o.Check(), "--rbf-shape must be in (0, 100]");
 }
 
 TEST(ReadSentences, TrimsSkipsCommentsAndNamesBadLines) {
@@ -298,6 +301,7 @@ TEST_F(SayJob, FragmentsTakeACorpusSentencesFaceFromItsOwnTake) {
   const json r = Say(o, progress);
   EXPECT_EQ(r["face_units"], "fragments");
   EXPECT_EQ(r["fragments"]["resampling"], "rbf");
+  EXPECT_EQ(r["fragments"]["rbf_shape"], 2.0);
   const json& list = r["sentences"][0]["fragments"];
   ASSERT_GE(list.size(), 1u);
   EXPECT_EQ(list[0]["take"], "s0");
@@ -317,6 +321,7 @@ TEST_F(SayJob, FragmentsTakeACorpusSentencesFaceFromItsOwnTake) {
   EXPECT_EQ(r["fragments"]["count"], static_cast<int>(list.size()));
   EXPECT_NEAR(r["fragments"]["mean_diphones"].get<double>(), double(covered) / list.size(), 1e-9);
   EXPECT_EQ(r["fragments"]["longest"], list[0]["diphones"]);
+  EXPECT_EQ(r["fragments"]["linear_fallback"], 0);
 }
 
 TEST_F(SayJob, RefusesOtherModelsAndTextsWithoutKeys) {

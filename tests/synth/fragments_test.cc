@@ -231,6 +231,38 @@ TEST(Fragments, MissingDiphoneIsInterpolatedBetweenPhoneMeans) {
   EXPECT_EQ(ToFaceTrack(t, phones).diphones[1].level, DiphoneLevel::kInterpolated);
 }
 
+TEST(Fragments, AnRbfThatSwingsOnNoisySamplesFallsBackToLinear) {
+  // A take whose face parameter alternates ±1 around a slow ramp (noise at
+  // the Nyquist rate), synthesised at its own timing: with wide bases (c =
+  // 30 spacings) the exact interpolant swings far beyond the samples, the
+  // fragment is resampled linearly and says so; at c = 1 it stays within
+  // 10 % of the samples' range beyond it.
+  auto noisy = [](double t) {
+    const auto f = std::llround(t * kRate);
+    Eigen::RowVectorXd v(2);
+    v << t + (f % 2 ? 1.0 : -1.0), 0.0;
+    return v;
+  };
+  const Dictionary d = FromTakes({Take("n", {{"_", 0.3}, {"a", 0.4}, {"_", 0.3}}, noisy)});
+  const auto phones = Targets({{"_", 0.3}, {"a", 0.4}, {"_", 0.3}});
+  FragmentOptions wide;
+  wide.rbf_shape = 30;
+  const FragmentTrack t = ConcatenateFragments(d, phones, 1.0, wide);
+  ASSERT_EQ(t.fragments.size(), 1u);
+  EXPECT_TRUE(t.fragments[0].linear_fallback);
+  // Linear at the sample times (every output frame is one): the samples themselves.
+  for (int f = 15; f <= 85; ++f) EXPECT_NEAR(t.face_params(f, 0), noisy(f / kRate)(0), 1e-9) << f;
+  FragmentOptions narrow;
+  narrow.rbf_shape = 1;
+  const FragmentTrack n = ConcatenateFragments(d, phones, 1.0, narrow);
+  EXPECT_FALSE(n.fragments[0].linear_fallback);
+  const double lo = -1.0 + 0.15, hi = 1.0 + 0.85;  // samples between frames 15 and 85
+  for (int f = 15; f <= 85; ++f) {
+    EXPECT_GE(n.face_params(f, 0), lo - 0.1 * (hi - lo)) << f;
+    EXPECT_LE(n.face_params(f, 0), hi + 0.1 * (hi - lo)) << f;
+  }
+}
+
 TEST(Fragments, BadInputsThrowNamingTheProblem) {
   const Dictionary d = FromTakes({Take("x", {{"_", 0.2}, {"a", 0.2}, {"_", 0.2}}, [](double) { return Constant(2); })});
   const auto phones = Targets({{"_", 0.2}, {"a", 0.2}, {"_", 0.2}});

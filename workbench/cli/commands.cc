@@ -775,6 +775,10 @@ class SayCommand : public Command {
         ->capture_default_str();
     sub_->add_option("--resampling", options_.resampling, "Fragments: rbf (inverse multiquadric) or linear")
         ->capture_default_str();
+    sub_->add_option("--rbf-shape", options_.rbf_shape,
+                     "Fragments: inverse-multiquadric shape c in smallest sample spacings (wider = smoother on "
+                     "clean data, more overshoot on noisy data)")
+        ->capture_default_str();
     sub_->add_option("--blend", options_.blend, "Fragments: overlap at each join, fraction of the shared phone (0-1)")
         ->capture_default_str();
     sub_->add_flag("--no-video", no_video_, "Do not write pointlight.mp4");

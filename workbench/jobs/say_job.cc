@@ -93,6 +93,7 @@ std::string SayOptions::Check() const {
   if (face_units != "diphones" && face_units != "fragments") return "--face-units must be diphones or fragments";
   if (dict::Resampling r; !dict::ParseResampling(resampling, &r)) return "--resampling must be rbf or linear";
   if (!(blend >= 0 && blend <= 1)) return "--blend must be in [0, 1]";
+  if (!(rbf_shape > 0 && rbf_shape <= 100)) return "--rbf-shape must be in (0, 100]";
   if (check && keys.empty()) return "--check needs the key model (--keys)";
   if (!corpus_phasing.empty() && !check) return "--corpus-phasing applies with --check";
   return "";
@@ -134,6 +135,7 @@ json Say(const SayOptions& options, Progress& progress) {
   dict::ParseResampling(options.resampling, &so.fragments.resampling);
   so.fragments.blend_fraction = options.blend;
   so.fragments.align_phones = options.align_phones;
+  so.fragments.rbf_shape = options.rbf_shape;
   const double mean_phone = dict::MeanPhoneDuration(dictionary);
 
   const fs::path out(options.output);
@@ -151,9 +153,11 @@ json Say(const SayOptions& options, Progress& progress) {
                  {"sentences", json::array()},
                  {"face_units", options.face_units}};
   if (so.face_fragments)
-    result["fragments"] = {
-        {"resampling", options.resampling}, {"blend", options.blend}, {"align_phones", options.align_phones}};
-  int fragments_n = 0, fragment_diphones = 0, fragments_interpolated = 0, longest_fragment = 0;
+    result["fragments"] = {{"resampling", options.resampling},
+                           {"rbf_shape", options.rbf_shape},
+                           {"blend", options.blend},
+                           {"align_phones", options.align_phones}};
+  int fragments_n = 0, fragment_diphones = 0, fragments_interpolated = 0, longest_fragment = 0, fragments_linear = 0;
   std::vector<int> levels(4, 0);
   int intended = 0, correct = 0, shape_correct = 0, placement_correct = 0, at_targets_correct = 0;
   int substitutions = 0, insertions = 0, deletions = 0;
@@ -251,7 +255,9 @@ json Say(const SayOptions& options, Progress& progress) {
                       {"diphones", f.slots},
                       {"interpolated", f.interpolated},
                       {"context_matches", f.context_matches},
-                      {"timing_rms_s", f.timing_rms_s}});
+                      {"timing_rms_s", f.timing_rms_s},
+                      {"linear_fallback", f.linear_fallback}});
+        fragments_linear += f.linear_fallback ? 1 : 0;
         ++fragments_n;
         fragment_diphones += f.slots;
         fragments_interpolated += f.interpolated ? 1 : 0;
@@ -316,6 +322,7 @@ json Say(const SayOptions& options, Progress& progress) {
     result["fragments"]["mean_diphones"] = Number(fragments_n ? double(fragment_diphones) / fragments_n : kNaN);
     result["fragments"]["longest"] = longest_fragment;
     result["fragments"]["interpolated"] = fragments_interpolated;
+    result["fragments"]["linear_fallback"] = fragments_linear;
   }
   result["fallback"] = LevelCounts(levels);
 

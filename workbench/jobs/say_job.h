@@ -41,6 +41,7 @@ struct SayOptions {
   bool keep_key_postures = false;       // a trimmed dikey still starts at its key's posture (ConcatOptions)
   std::string face_units = "diphones";  // "diphones" (Viterbi) or "fragments" (seed-003, synth/fragments.h)
   std::string resampling = "rbf";       // fragments: "rbf" (inverse multiquadric) or "linear"
+  double rbf_shape = 2;                 // fragments: inverse-multiquadric shape, in smallest sample spacings
   double blend = 0.5;                   // fragments: overlap at a join, fraction of the shared phone
   bool align_phones = true;             // fragments: warp through every phone boundary
   bool video = true;                    // write pointlight.mp4
