@@ -106,13 +106,17 @@ Eigen::MatrixXd ResampleLinear(const Eigen::VectorXd& times, const Eigen::Matrix
   return out;
 }
 
-Eigen::MatrixXd ResampleRbf(const Eigen::VectorXd& times, const Eigen::MatrixXd& values, const Eigen::VectorXd& query,
-                            double shape_s) {
-  const Eigen::Index n = times.size();
-  if (n < 3 || !(shape_s > 0)) return ResampleLinear(times, values, query);
+namespace {
+
+// The global interpolant through samples [i0, i1] evaluated at `query`
+// rows `rows` (all inside [times(i0), times(i1)]).
+void RbfBlock(const Eigen::VectorXd& times, const Eigen::MatrixXd& values, Eigen::Index i0, Eigen::Index i1,
+              const Eigen::VectorXd& query, const std::vector<Eigen::Index>& rows, double shape_s,
+              Eigen::MatrixXd* out) {
+  const Eigen::Index n = i1 - i0 + 1;
   // Times centred and scaled by the shape, for conditioning: φ(r) = 1/sqrt(r² + 1).
-  const double t0 = times.mean();
-  const Eigen::VectorXd x = (times.array() - t0) / shape_s;
+  const double t0 = times.segment(i0, n).mean();
+  const Eigen::VectorXd x = (times.segment(i0, n).array() - t0) / shape_s;
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n + 2, n + 2);
   for (Eigen::Index i = 0; i < n; ++i) {
     for (Eigen::Index j = 0; j < n; ++j) {
@@ -123,26 +127,48 @@ Eigen::MatrixXd ResampleRbf(const Eigen::VectorXd& times, const Eigen::MatrixXd&
     a(i, n + 1) = a(n + 1, i) = x(i);
   }
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n + 2, values.cols());
-  rhs.topRows(n) = values;
+  rhs.topRows(n) = values.middleRows(i0, n);
   const Eigen::MatrixXd w = a.partialPivLu().solve(rhs);
-  Eigen::MatrixXd out(query.size(), values.cols());
-  for (Eigen::Index q = 0; q < query.size(); ++q) {
-    const double t = query(q);
-    if (t <= times(0)) {
-      out.row(q) = values.row(0);
-      continue;
-    }
-    if (t >= times(n - 1)) {
-      out.row(q) = values.row(n - 1);
-      continue;
-    }
-    const double xq = (t - t0) / shape_s;
+  for (const Eigen::Index q : rows) {
+    const double xq = (query(q) - t0) / shape_s;
     Eigen::RowVectorXd v = w.row(n) + xq * w.row(n + 1);
     for (Eigen::Index i = 0; i < n; ++i) {
       const double r = xq - x(i);
       v += w.row(i) / std::sqrt(r * r + 1.0);
     }
-    out.row(q) = v;
+    out->row(q) = v;
+  }
+}
+
+}  // namespace
+
+Eigen::MatrixXd ResampleRbf(const Eigen::VectorXd& times, const Eigen::MatrixXd& values, const Eigen::VectorXd& query,
+                            double shape_s) {
+  const Eigen::Index n = times.size();
+  if (n < 3 || !(shape_s > 0)) return ResampleLinear(times, values, query);
+  Eigen::MatrixXd out(query.size(), values.cols());
+  // Queries by block of kRbfBlock samples (the interval starting at sample
+  // k belongs to block k / kRbfBlock); each block's interpolant passes through
+  // its samples and kRbfPad more on each side, so switching block at a
+  // sample keeps the track continuous. One block when n ≤ kRbfBlock + 2 pads.
+  const Eigen::Index blocks = n <= kRbfBlock + 2 * kRbfPad ? 1 : (n - 1 + kRbfBlock - 1) / kRbfBlock;
+  std::vector<std::vector<Eigen::Index>> rows(static_cast<size_t>(blocks));
+  for (Eigen::Index q = 0; q < query.size(); ++q) {
+    const double t = query(q);
+    if (t <= times(0)) {
+      out.row(q) = values.row(0);
+    } else if (t >= times(n - 1)) {
+      out.row(q) = values.row(n - 1);
+    } else {
+      const auto k = static_cast<Eigen::Index>(std::upper_bound(times.data(), times.data() + n, t) - times.data()) - 1;
+      rows[static_cast<size_t>(blocks == 1 ? 0 : std::min(k / kRbfBlock, blocks - 1))].push_back(q);
+    }
+  }
+  for (Eigen::Index b = 0; b < blocks; ++b) {
+    if (rows[static_cast<size_t>(b)].empty()) continue;
+    const Eigen::Index i0 = blocks == 1 ? 0 : std::max<Eigen::Index>(0, b * kRbfBlock - kRbfPad);
+    const Eigen::Index i1 = blocks == 1 ? n - 1 : std::min<Eigen::Index>(n - 1, (b + 1) * kRbfBlock + kRbfPad);
+    RbfBlock(times, values, i0, i1, query, rows[static_cast<size_t>(b)], shape_s, &out);
   }
   return out;
 }

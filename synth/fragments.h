@@ -99,6 +99,11 @@ Eigen::MatrixXd ResampleLinear(const Eigen::VectorXd& times, const Eigen::Matrix
                                const Eigen::VectorXd& query);
 // The inverse-multiquadric interpolant f(t) = a + b t + Σ α_i φ(|t − t_i|)
 // with Σ α_i = Σ α_i t_i = 0, through every sample; shape c in seconds.
+// Beyond kRbfBlock + 2 kRbfPad samples (a long fragment) the interpolant is
+// local: the samples in blocks of kRbfBlock, each block's queries read from
+// the interpolant through its samples and kRbfPad on each side (exact at
+// every sample, continuous where blocks meet, cost linear in the samples).
+inline constexpr Eigen::Index kRbfBlock = 128, kRbfPad = 64;
 Eigen::MatrixXd ResampleRbf(const Eigen::VectorXd& times, const Eigen::MatrixXd& values, const Eigen::VectorXd& query,
                             double shape_s);
 
