@@ -556,6 +556,17 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
     r.used_to = c.used_to;
     if (c.shape_unit >= 0) r.units.push_back(c.shape_unit);
     if (c.level == FallbackLevel::kTwoStreams) r.units.push_back(c.pose_unit);
+    if (c.pose_unit >= 0) {
+      const DikeyUnit& up = d.dikeys[static_cast<size_t>(c.pose_unit)];
+      const double lag = up.from_placement_lag_s, dur = up.duration_s();
+      if (std::isfinite(lag) && lag < 0) {
+        r.leaving_placement_lag_s = lag;
+      } else if (std::isfinite(lag) && dur > 0) {
+        // Unit fraction → slot fraction (rows before skip trimmed away).
+        const double skip = c.pose_skip, u = std::clamp((lag / dur - skip) / (1.0 - skip), 0.0, 1.0);
+        r.leaving_placement_lag_s = u * (keys[i + 1].target_s - keys[i].target_s);
+      }
+    }
     out.keys.push_back(std::move(r));
   }
   return out;

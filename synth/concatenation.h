@@ -11,6 +11,7 @@
 // of placements) is learned from the dictionary itself; nothing depends on
 // the virtual cuer's marker names or proportions.
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -94,6 +95,12 @@ struct KeyReport {
   FallbackLevel level = FallbackLevel::kWhole;
   std::vector<int> units;
   KeyCode used_to;  // level 1: the arriving code of the unit used (placement replaced); else = code
+  // When the slot's pose unit reaches the key it leaves's placement, after
+  // the slot's start (s, output clock): the unit's from_placement_lag_s
+  // through the slot's warp (0 when trimmed away; unwarped when negative,
+  // i.e. the placement arrived first). NaN when unknown (no lag stored,
+  // level 3).
+  double leaving_placement_lag_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct HandTrack {

@@ -39,6 +39,11 @@ struct TakeSeries {
   // Acoustic onset (s) of the syllable each key codes, one per mark, NaN when
   // unknown (rests, or no phone tier): gives DikeyUnit::phasing_s.
   std::vector<double> syllable_onset_s;
+  // Placement target time (s) of each mark's key, one per mark, NaN when
+  // unknown (empty = none known): the placement arrives after the shape
+  // target the mark holds (the placement_targets tier). Gives the units'
+  // placement lags.
+  std::vector<double> placement_target_s;
   // For diphones: the face model's parameters (frames × Q; empty = no
   // diphones) and the phones, contiguous, in time order, label "_" = pause.
   Eigen::MatrixXd face_params;
@@ -63,6 +68,12 @@ struct DikeyUnit {
   // The arriving key's target time minus the acoustic onset of its syllable
   // (s; negative = the hand arrives before the sound); NaN when unknown.
   double phasing_s = 0;
+  // Placement target minus shape target (s) of the key left and of the key
+  // reached, NaN when unknown: the leaving key's placement arrives
+  // from_placement_lag_s after the unit's first row (in its rows when
+  // positive), the reached key's to_placement_lag_s after its last.
+  double from_placement_lag_s = std::numeric_limits<double>::quiet_NaN();
+  double to_placement_lag_s = std::numeric_limits<double>::quiet_NaN();
   double duration_s() const { return end_s - start_s; }
   int64_t frames() const { return hand_params.rows(); }
 };

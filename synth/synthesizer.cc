@@ -169,7 +169,17 @@ Synthesis Synthesize(const Utterance& utterance, const Dictionary& dictionary, c
     const PlannedKey& k = s.plan.keys[i];
     const double t = std::min(k.target_s, end_s);
     key_tier.labels.push_back({t, t, k.code.Text()});
-    placement_tier.labels.push_back({t, t, k.code.Text()});
+    // The placement arrives when the unit leaving the key reaches it (its
+    // stored lag), else at the key's target.
+    double tp = t;
+    if (i < s.hand.keys.size() && std::isfinite(s.hand.keys[i].leaving_placement_lag_s)) {
+      const double lo = i > 0 ? s.plan.keys[i - 1].target_s : 0.0;
+      const double hi = i + 1 < s.plan.keys.size() ? s.plan.keys[i + 1].target_s : end_s;
+      tp = std::clamp(k.target_s + s.hand.keys[i].leaving_placement_lag_s, lo + 0.6 * (k.target_s - lo),
+                      k.target_s + 0.4 * (hi - k.target_s));
+      tp = std::min(tp, end_s);
+    }
+    placement_tier.labels.push_back({tp, tp, k.code.Text()});
     if (i < keys.size() && keys[i].type != KeyType::kRest) {
       expected.labels.push_back({keys[i].a1_s + lead, std::min(keys[i].end_s + lead, end_s), k.code.Text()});
     }

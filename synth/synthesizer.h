@@ -72,7 +72,9 @@ struct Synthesis {
   double speed_limit_mm = 0;     // the limit applied (0 = none)
   // Every model marker at the output rate, its tiers: "words", "phones"
   // (IPA, pauses "_"), "keys" (point tier: each key's target, code "PS"),
-  // "placement_targets" (the same times), "expected_keys" (interval tier:
+  // "placement_targets" (each key's target plus the placement lag of the
+  // unit leaving it, HandTrack's leaving_placement_lag_s, kept within 40 %
+  // of the slots around it; the key's target when unknown), "expected_keys" (interval tier:
   // each key from its syllable's acoustic onset to the next's, as csw cue
   // writes it) and "gestures" (interval tier: each key's movement, from
   // the previous target to its own, "PS <fallback level>").

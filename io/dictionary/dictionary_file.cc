@@ -200,7 +200,7 @@ void SaveDictionaryFile(const std::string& path, const dict::Dictionary& d) {
     std::vector<std::string> take(n), from_code(n), to_code(n);
     std::vector<int64_t> key_index(n), from_placement(n), from_shape(n), to_placement(n), to_shape(n), first_frame(n),
         offset(n), frames(n);
-    std::vector<double> start_s(n), end_s(n), duration_s(n), phasing_s(n), rate_hz(n);
+    std::vector<double> start_s(n), end_s(n), duration_s(n), phasing_s(n), rate_hz(n), from_lag(n), to_lag(n);
     int64_t total = 0;
     for (size_t i = 0; i < n; ++i) {
       const dict::DikeyUnit& u = d.dikeys[i];
@@ -220,6 +220,8 @@ void SaveDictionaryFile(const std::string& path, const dict::Dictionary& d) {
       end_s[i] = u.end_s;
       duration_s[i] = u.duration_s();
       phasing_s[i] = u.phasing_s;
+      from_lag[i] = u.from_placement_lag_s;
+      to_lag[i] = u.to_placement_lag_s;
       rate_hz[i] = u.rate_hz;
     }
     const Eigen::Index p = static_cast<Eigen::Index>(d.hand_parameter_names.size());
@@ -247,6 +249,8 @@ void SaveDictionaryFile(const std::string& path, const dict::Dictionary& d) {
     h5::WriteDoubles(gi, "end_s", end_s, where, obj("end_s"));
     h5::WriteDoubles(gi, "duration_s", duration_s, where, obj("duration_s"));
     h5::WriteDoubles(gi, "phasing_s", phasing_s, where, obj("phasing_s"));
+    h5::WriteDoubles(gi, "from_placement_lag_s", from_lag, where, obj("from_placement_lag_s"));
+    h5::WriteDoubles(gi, "to_placement_lag_s", to_lag, where, obj("to_placement_lag_s"));
     h5::WriteDoubles(gi, "rate_hz", rate_hz, where, obj("rate_hz"));
     h5::WriteStrings(gi, "hand_parameter_names", d.hand_parameter_names, where, obj("hand_parameter_names"));
     WriteRows(gi, "hand_params", hand, where, obj("hand_params"));
@@ -452,6 +456,10 @@ dict::Dictionary LoadDictionaryFile(const std::string& path) {
   const auto offset = ReadVector(gi, "offset", n, path), frames = ReadVector(gi, "frames", n, path);
   const auto start_s = ReadVector(gi, "start_s", n, path), end_s = ReadVector(gi, "end_s", n, path);
   const auto phasing_s = ReadVector(gi, "phasing_s", n, path), rate_hz = ReadVector(gi, "rate_hz", n, path);
+  // Optional (files before the placement lags): NaN = unknown.
+  std::vector<double> from_lag(n, std::numeric_limits<double>::quiet_NaN()), to_lag = from_lag;
+  if (h5::LinkExists(gi, "from_placement_lag_s")) from_lag = ReadVector(gi, "from_placement_lag_s", n, path);
+  if (h5::LinkExists(gi, "to_placement_lag_s")) to_lag = ReadVector(gi, "to_placement_lag_s", n, path);
   std::vector<hsize_t> dims;
   ReadNumbers(gi, "hand_params", 2, &dims, path);
   const hsize_t total = dims[0];
@@ -476,6 +484,8 @@ dict::Dictionary LoadDictionaryFile(const std::string& path) {
     u.first_frame = static_cast<int64_t>(first_frame[i]);
     u.rate_hz = rate_hz[i];
     u.phasing_s = phasing_s[i];
+    u.from_placement_lag_s = from_lag[i];
+    u.to_placement_lag_s = to_lag[i];
     const auto o = static_cast<Eigen::Index>(offset[i]), k = static_cast<Eigen::Index>(frames[i]);
     u.hand_params = hand.middleRows(o, k);
     u.forearm_in_head = forearm.middleRows(o, k);

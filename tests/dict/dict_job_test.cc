@@ -18,6 +18,7 @@
 #include "tests/testing/testing.h"
 #include "workbench/jobs/fit_job.h"
 #include "workbench/jobs/job_util.h"
+#include "workbench/jobs/tier_util.h"
 
 namespace csw::jobs {
 namespace {
@@ -263,9 +264,24 @@ TEST_F(DictJob, ForearmPoseRelativeToTheHeadRepeatsPerKey) {
   // At the arriving key's placement target (the simulator's), when the unit
   // holds that frame.
   std::map<std::string, std::vector<Eigen::Vector3d>> ends;
+  // The placement lags are the placement_targets tier's times minus the keys
+  // tier's, mark by mark (the simulator's true targets, except where it
+  // keeps a tier increasing: a placement reached before the previous one).
+  int arrivals = 0, lags = 0, true_lags = 0;
   for (const dict::DikeyUnit& u : d.dikeys) {
     if (u.to.IsRest()) continue;
     const GestureTruth& b = sims.at(u.take)->keys[static_cast<size_t>(u.index) + 1];
+    ++arrivals;
+    if (std::isfinite(u.to_placement_lag_s)) {
+      ++lags;
+      const std::vector<LabelTier> tiers = SimulationTiers(*sims.at(u.take));
+      const LabelTier* keys_tier = FindTier(tiers, "keys");
+      const LabelTier* places = FindTier(tiers, "placement_targets");
+      ASSERT_TRUE(keys_tier && places);
+      const size_t k = static_cast<size_t>(u.index) + 1;
+      EXPECT_NEAR(u.to_placement_lag_s, places->labels[k].start_s - keys_tier->labels[k].start_s, 1e-9) << u.take;
+      if (std::abs(u.to_placement_lag_s - (b.timing.placement_target_s - b.timing.shape_target_s)) < 1e-6) ++true_lags;
+    }
     const int64_t row = std::llround(b.timing.placement_target_s * u.rate_hz) - u.first_frame;
     if (row < 0 || row >= u.frames()) continue;
     ends[u.to.Text()].push_back(u.forearm_in_head.row(row).rightCols(3).transpose());
@@ -280,6 +296,9 @@ TEST_F(DictJob, ForearmPoseRelativeToTheHeadRepeatsPerKey) {
     mean /= static_cast<double>(v.size());
     for (const auto& p : v) worst = std::max(worst, (p - mean).norm());
   }
+  EXPECT_EQ(lags, arrivals);
+  EXPECT_GE(true_lags, 0.8 * arrivals);
+  std::printf("placement lags: %d of %d arrivals, %d the true lag\n", lags, arrivals, true_lags);
   ASSERT_GE(groups, 2);
   EXPECT_LT(worst, 35.0);
   std::printf("forearm-in-head spread at repeated keys: max %.1f mm over %d keys\n", worst, groups);

@@ -35,6 +35,8 @@ dict::Dictionary SmallDictionary() {
     u.first_frame = 60 + 120 * i;
     u.rate_hz = 120;
     u.phasing_s = i == 2 ? std::numeric_limits<double>::quiet_NaN() : -0.05 * i;
+    u.from_placement_lag_s = i == 1 ? std::numeric_limits<double>::quiet_NaN() : 0.01 * (i + 1);
+    u.to_placement_lag_s = -0.02 * i;
     const int n = 2 + i;
     u.hand_params.resize(n, 3);
     u.forearm_in_head.resize(n, 6);
@@ -104,6 +106,11 @@ TEST(DictionaryFile, RoundTrip) {
       EXPECT_TRUE(std::isnan(b.phasing_s));
     else
       EXPECT_EQ(b.phasing_s, a.phasing_s);
+    if (std::isnan(a.from_placement_lag_s))
+      EXPECT_TRUE(std::isnan(b.from_placement_lag_s));
+    else
+      EXPECT_EQ(b.from_placement_lag_s, a.from_placement_lag_s);
+    EXPECT_EQ(b.to_placement_lag_s, a.to_placement_lag_s);
     EXPECT_EQ(b.hand_params, a.hand_params);
     EXPECT_EQ(b.forearm_in_head, a.forearm_in_head);
     EXPECT_EQ(b.head_pose, a.head_pose);
@@ -200,10 +207,11 @@ TEST(DictionaryFile, TheDocumentedLayoutReadWithTheHdf5CApiAlone) {
   EXPECT_EQ(IntAttr(g, "count"), 3);
   H5Gclose(g);
   // Per unit (3): codes as numbers, times, rows of the per-frame arrays.
-  for (const char* name : {"/dikeys/take", "/dikeys/from_code", "/dikeys/to_code", "/dikeys/key_index",
-                           "/dikeys/from_placement", "/dikeys/from_shape", "/dikeys/to_placement", "/dikeys/to_shape",
-                           "/dikeys/first_frame", "/dikeys/offset", "/dikeys/frames", "/dikeys/start_s",
-                           "/dikeys/end_s", "/dikeys/duration_s", "/dikeys/phasing_s", "/dikeys/rate_hz"}) {
+  for (const char* name :
+       {"/dikeys/take", "/dikeys/from_code", "/dikeys/to_code", "/dikeys/key_index", "/dikeys/from_placement",
+        "/dikeys/from_shape", "/dikeys/to_placement", "/dikeys/to_shape", "/dikeys/first_frame", "/dikeys/offset",
+        "/dikeys/frames", "/dikeys/start_s", "/dikeys/end_s", "/dikeys/duration_s", "/dikeys/phasing_s",
+        "/dikeys/rate_hz", "/dikeys/from_placement_lag_s", "/dikeys/to_placement_lag_s"}) {
     EXPECT_EQ(DatasetShape(f, name), std::vector<hsize_t>{3}) << name;
   }
   // Frames 2 + 3 + 4 = 9 rows, concatenated in unit order.

@@ -142,6 +142,25 @@ TEST(Dikeys, PhasingIsTheTargetMinusTheSyllableOnset) {
   EXPECT_TRUE(std::isnan(u[3].phasing_s));  // to rest
 }
 
+TEST(Dikeys, PlacementLagsAreThePlacementTargetsMinusTheShapeTargets) {
+  // Marks at 0.10, 0.30, 0.55 (rests added at 0 and at the end): the
+  // placements arrive 30 ms after, 20 ms before, unknown.
+  TakeSeries s = Series();
+  s.placement_target_s = {0.13, 0.28, std::numeric_limits<double>::quiet_NaN()};
+  const std::vector<DikeyUnit> u = ExtractDikeys(s);
+  ASSERT_EQ(u.size(), 4u);
+  EXPECT_TRUE(std::isnan(u[0].from_placement_lag_s));  // the added rest
+  EXPECT_NEAR(u[0].to_placement_lag_s, 0.03, 1e-12);
+  EXPECT_NEAR(u[1].from_placement_lag_s, 0.03, 1e-12);
+  EXPECT_NEAR(u[1].to_placement_lag_s, -0.02, 1e-12);
+  EXPECT_NEAR(u[2].from_placement_lag_s, -0.02, 1e-12);
+  EXPECT_TRUE(std::isnan(u[2].to_placement_lag_s));
+  EXPECT_TRUE(std::isnan(u[3].from_placement_lag_s));
+  EXPECT_TRUE(std::isnan(u[3].to_placement_lag_s));
+  s.placement_target_s = {0.13};
+  EXPECT_THROW(ExtractDikeys(s), InvalidInput);
+}
+
 TEST(Dikeys, BadSeriesGiveOneClearError) {
   TakeSeries s = Series();
   s.head_pose.conservativeResize(50, 6);

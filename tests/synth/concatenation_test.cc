@@ -202,6 +202,30 @@ TEST(ConcatenateDikeys, AUnitMuchLongerThanItsSlotIsTrimmedNotCompressed) {
               ::testing::ThrowsMessage<InvalidInput>(HasSubstr("max_compression must be 0 or >= 1")));
 }
 
+TEST(ConcatenateDikeys, LeavingPlacementLagFollowsTheSlotsWarpAndTrim) {
+  // Units leaving 12 and 35 whose placements arrived 0.1 s and -0.03 s after
+  // their first rows. 12 → 35 (0.5 s) on a 0.25 s slot: with no trimming the
+  // lag is warped to 0.05 s; with max_compression 1.25 the unit's first 0.375
+  // s are trimmed (the 0.1 s arrival with them): 0. A negative lag (the
+  // placement arrived before the shape target) is kept as it is; the rest's
+  // unknown lag stays NaN.
+  std::vector<DikeyUnit> units = {Dikey("00", "12", 0.3), Dikey("12", "35", 0.5), Dikey("35", "00", 0.4)};
+  units[1].from_placement_lag_s = 0.1;
+  units[2].from_placement_lag_s = -0.03;
+  const Dictionary d = DikeyDictionary(units);
+  const auto keys = Keys({{"00", 0.0}, {"12", 0.3}, {"35", 0.55}, {"00", 0.95}});
+  ConcatOptions o;
+  o.max_compression = 0;
+  HandTrack t = ConcatenateDikeys(d, keys, 1.0, o);
+  ASSERT_EQ(t.keys.size(), 3u);
+  EXPECT_TRUE(std::isnan(t.keys[0].leaving_placement_lag_s));
+  EXPECT_NEAR(t.keys[1].leaving_placement_lag_s, 0.05, 1e-12);
+  EXPECT_NEAR(t.keys[2].leaving_placement_lag_s, -0.03, 1e-12);
+  o.max_compression = 1.25;
+  t = ConcatenateDikeys(d, keys, 1.0, o);
+  EXPECT_NEAR(t.keys[1].leaving_placement_lag_s, 0.0, 1e-12);
+}
+
 TEST(ConcatenateDikeys, ChoosesTheCloserDurationWhenJoinsTie) {
   // Two continuous 12 → 35 candidates for a 0.30 s slot: 0.20 s (listed
   // first) and 0.32 s.

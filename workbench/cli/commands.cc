@@ -710,6 +710,10 @@ class DictCommand : public Command {
                   "Takes, comma-separated names or glob patterns; default every take but fill versions");
     b->add_option("--tier", options_.tier, "Key tier: keys_aligned (csw keys score) or keys (labels)")
         ->capture_default_str();
+    b->add_option("--placement-tier", options_.placement_tier,
+                  "Point tier of placement targets: each key's placement lag, written into csw say's "
+                  "placement_targets (\"\" = none)")
+        ->capture_default_str();
     b->add_option("--phones", options_.phones, "Phone tier for the per-dikey phasing and the diphones (\"\" = none)")
         ->capture_default_str();
     b->add_option("--max-unsolved", options_.dikeys.max_unsolved_fraction,

@@ -44,7 +44,8 @@ struct TakeWork {
   double rate_hz = 0;
   MarkerArray face_input, hand_input;
   dict::TakeSeries series;
-  bool phasing = false;  // syllable onsets found
+  bool phasing = false;    // syllable onsets found
+  int placement_lags = 0;  // keys whose placement target was found
   std::vector<dict::DikeyUnit> units;
   dict::ExtractionStats stats;
   std::vector<dict::DiphoneUnit> diphones;
@@ -73,6 +74,49 @@ std::vector<std::string> ModelNames(const std::vector<std::string>& a, const std
   std::vector<std::string> out = a;
   out.insert(out.end(), b.begin(), b.end());
   out.insert(out.end(), c.begin(), c.end());
+  return out;
+}
+
+// The placement target of every mark (NaN when unknown). A placement tier
+// with one mark per key, the same placements in the same order, is matched
+// mark by mark (the placement may arrive before or after the shape target).
+// Otherwise each key takes the placement mark with its placement nearest to
+// it, strictly between the neighbouring keys' times, when no other key with
+// that placement is nearer to that mark (repeated placements are ambiguous).
+std::vector<double> PlacementTargets(const Take& take, const std::vector<KeyMark>& marks, const std::string& tier_name,
+                                     const std::string& where) {
+  std::vector<double> out(marks.size(), std::numeric_limits<double>::quiet_NaN());
+  const LabelTier* tier = tier_name.empty() ? nullptr : FindTier(take.tiers, tier_name);
+  if (!tier) return out;
+  const std::vector<KeyMark> targets = ReadKeyTier(*tier, where + ", tier '" + tier_name + "'");
+  bool in_order = targets.size() == marks.size();
+  for (size_t k = 0; in_order && k < marks.size(); ++k) in_order = targets[k].code.placement == marks[k].code.placement;
+  if (in_order) {
+    for (size_t k = 0; k < marks.size(); ++k) out[k] = targets[k].time_s;
+    return out;
+  }
+  auto nearest_key = [&](const KeyMark& t) {
+    size_t best = marks.size();
+    for (size_t k = 0; k < marks.size(); ++k) {
+      if (marks[k].code.placement != t.code.placement) continue;
+      if (best == marks.size() || std::abs(marks[k].time_s - t.time_s) < std::abs(marks[best].time_s - t.time_s))
+        best = k;
+    }
+    return best;
+  };
+  for (size_t k = 0; k < marks.size(); ++k) {
+    const double lo = k > 0 ? marks[k - 1].time_s : -std::numeric_limits<double>::infinity();
+    const double hi = k + 1 < marks.size() ? marks[k + 1].time_s : std::numeric_limits<double>::infinity();
+    double best = std::numeric_limits<double>::infinity();
+    for (const KeyMark& t : targets) {
+      if (t.code.placement != marks[k].code.placement || !(t.time_s > lo && t.time_s < hi) || nearest_key(t) != k)
+        continue;
+      if (std::abs(t.time_s - marks[k].time_s) < best) {
+        best = std::abs(t.time_s - marks[k].time_s);
+        out[k] = t.time_s;
+      }
+    }
+  }
   return out;
 }
 
@@ -178,6 +222,7 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
     // Marks within the range, on the range's clock.
     const std::vector<KeyMark> all = ReadKeyTier(*tier, where);
     const std::vector<double> onsets = SyllableOnsets(take, all, options.phones, where);
+    const std::vector<double> placements = PlacementTargets(take, all, options.placement_tier, where);
     const double offset = static_cast<double>(range.first) / take.rate_hz;
     const double last = static_cast<double>(range.first + range.count - 1) / take.rate_hz;
     w->series.take = range.spec;
@@ -186,6 +231,8 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
       if (all[k].time_s < offset || all[k].time_s > last) continue;
       w->series.keys.push_back({all[k].time_s - offset, all[k].code});
       if (!onsets.empty()) w->series.syllable_onset_s.push_back(onsets[k] - offset);
+      w->series.placement_target_s.push_back(placements[k] - offset);
+      if (std::isfinite(placements[k])) ++w->placement_lags;
     }
     w->phasing = !onsets.empty();
     w->series.phones = RangePhones(take, options.phones, offset, last, where);
@@ -245,6 +292,7 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
                      {"rejected_unsolved", w.stats.rejected_unsolved},
                      {"rejected_outside", w.stats.rejected_outside},
                      {"phasing", w.phasing},
+                     {"placement_lags", w.placement_lags},
                      {"phones", w.series.phones.size()},
                      {"diphones", w.diphone_stats.kept}});
     diphone_total.successions += w.diphone_stats.successions;

@@ -33,6 +33,10 @@ struct DictBuildOptions {
   std::vector<std::string> takes;  // take selection; empty = every take but fill versions
   std::string tier = "keys_aligned";
   std::string phones = "phones";  // phone tier for the phasing and the diphones ("" = none)
+  // Point tier of placement targets ("" = none; absent in a take = unknown):
+  // each key's placement lag after its shape target (DikeyUnit), which the
+  // synthesizer writes into its own placement_targets tier.
+  std::string placement_tier = "placement_targets";
   dict::DikeyOptions dikeys;
   InversionOptions inversion;
   int threads = 0;  // takes inverted in parallel (0 = hardware threads)
@@ -40,7 +44,8 @@ struct DictBuildOptions {
 };
 
 // {"corpus", "models", "keys", "output", "tier", "models_fingerprint",
-//  "takes": [{"take", "frames", "keys", "dikeys", "rejected_unsolved", "rejected_outside", "phasing"}],
+//  "takes": [{"take", "frames", "keys", "dikeys", "rejected_unsolved", "rejected_outside", "phasing",
+//             "placement_lags": keys whose placement target was found}],
 //  "dikeys": {"successions", "kept", "rejected_unsolved", "rejected_outside", "frames"},
 //  "diphones": {the same, "distinct", "coverage": {"p1+p2": candidates}},
 //  "coverage": {"corpus": COVERAGE, "dictionary": COVERAGE, "complete": bool,
