@@ -217,6 +217,34 @@ TEST(PhasingJob, AlignedDecodingGivesTheRoughTargetsWithoutLabels) {
     }
 }
 
+// A lab that labels only the shape targets (no placement tier): the shape
+// targets seed the placement fits, which stay near their seeds, so the
+// placement fits are run again from their first targets.
+TEST(PhasingJob, WithoutAPlacementTierThePlacementFitsAreRefittedFromTheirFirstTargets) {
+  Fixture fx;
+  Progress progress;
+  KeysTrainOptions t;
+  t.corpus = fx.corpus;
+  t.takes = {"s*"};
+  t.output = fx.keys;
+  KeysTrain(t, progress);
+  PhasingOptions o;
+  o.corpus = fx.corpus;
+  o.keys = fx.keys;
+  o.truth = fx.truth;
+  o.targets = "labels";
+  o.label_placement = "no_such_tier";
+  const json r = Phasing(o, progress);
+  const json& e = r["errors_vs_truth"]["kinematic"]["CV"]["placement"]["target"];
+  std::printf("CV placement target minus the truth, seeded by the shape targets: %s\n", e.dump().c_str());
+  ASSERT_GT(e["count"].get<int>(), 10);
+  EXPECT_LT(std::abs(e["mean_ms"].get<double>()), 15.0);
+  for (const json& take : r["takes"]) {
+    ASSERT_TRUE(take["placement_reseeded"].is_object()) << take.dump();
+    EXPECT_GE(take["placement_reseeded"]["refitted_from"].get<int>(), 1) << take.dump();
+  }
+}
+
 TEST(PhasingJob, MissingPhoneTierNamesTheTakeAndItsTiers) {
   Fixture fx;
   Progress progress;

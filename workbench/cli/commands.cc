@@ -675,6 +675,11 @@ class PhasingCommand : public Command {
     sub_->add_option("--targets", options_.targets,
                      "Rough target times: labels (tiers keys / placement_targets), aligned (decoding) or auto")
         ->capture_default_str();
+    sub_->add_option("--tier", options_.labels, "Point tier of labelled shape targets")->capture_default_str();
+    sub_->add_option("--placement-tier", options_.label_placement,
+                     "Point tier of labelled placement targets (absent: the shape targets seed the placement fits, "
+                     "refitted once from their first targets)")
+        ->capture_default_str();
     sub_->add_flag("--json", json_, "Print the report as JSON");
   }
   int Run(Progress& progress) override {
