@@ -239,14 +239,19 @@ struct DikeyCandidate {
 
 // Learned from the dictionary: per shape the mean hand parameters, per
 // placement the mean forearm-in-head and head pose, at every key instant
-// (units' first and last rows).
+// (units' first and last rows); per whole key code every instance's hand
+// parameters and forearm-in-head pose (the posture pull).
 struct KeyClasses {
   std::map<int, Mean> shape, placement;
+  std::map<std::string, std::vector<Eigen::RowVectorXd>> postures;
   void Add(const KeyCode& code, const DikeyUnit& u, Eigen::Index row) {
     shape[code.shape].Add(u.hand_params.row(row));
     Eigen::RowVectorXd pose(12);
     pose << u.forearm_in_head.row(row), u.head_pose.row(row);
     placement[code.placement].Add(pose);
+    Eigen::RowVectorXd posture(u.hand_params.cols() + 6);
+    posture << u.hand_params.row(row), u.forearm_in_head.row(row);
+    postures[code.Text()].push_back(std::move(posture));
   }
   bool Has(const KeyCode& k) const { return shape.count(k.shape) && placement.count(k.placement); }
   Eigen::RowVectorXd Of(const KeyCode& k) const {
@@ -260,6 +265,50 @@ struct KeyClasses {
     return placement.at(placement_class).Value().segment(3, 3).transpose();
   }
 };
+
+// A key code's postures: their mean, per-column standard deviation (at
+// least `floor`) and exemplar (the instance nearest the mean in those
+// deviations).
+struct PostureClass {
+  Eigen::RowVectorXd mean, sd, exemplar;
+};
+PostureClass MakePostureClass(const std::vector<Eigen::RowVectorXd>& rows, const Eigen::RowVectorXd& floor) {
+  Mean m, sq;
+  for (const Eigen::RowVectorXd& r : rows) {
+    m.Add(r);
+    sq.Add(r.array().square().matrix());
+  }
+  PostureClass c;
+  c.mean = m.Value();
+  c.sd = (sq.Value().array() - c.mean.array().square()).max(0.0).sqrt().matrix().cwiseMax(floor);
+  double best = kInf;
+  for (const Eigen::RowVectorXd& r : rows) {
+    const double d = (r - c.mean).cwiseQuotient(c.sd).squaredNorm();
+    if (d < best) {
+      best = d;
+      c.exemplar = r;
+    }
+  }
+  return c;
+}
+
+// Adds to `m` (frames × c) the corrections `corr` (one row per point, at
+// strictly increasing frames `at`), blended by minimum-jerk ramps between
+// points and held before the first and after the last.
+void AddRamped(const std::vector<int64_t>& at, const std::vector<Eigen::RowVectorXd>& corr, Eigen::MatrixXd* m) {
+  size_t k = 0;
+  for (int64_t f = 0; f < m->rows(); ++f) {
+    while (k < at.size() && at[k] <= f) ++k;  // at[k-1] <= f < at[k]
+    if (k == 0) {
+      m->row(f) += corr.front();
+    } else if (k == at.size()) {
+      m->row(f) += corr.back();
+    } else {
+      const double u = static_cast<double>(f - at[k - 1]) / static_cast<double>(at[k] - at[k - 1]);
+      m->row(f) += corr[k - 1] + MinimumJerk(u) * (corr[k] - corr[k - 1]);
+    }
+  }
+}
 
 void CheckDikeys(const Dictionary& d) {
   if (d.dikeys.empty()) throw InvalidInput("the dictionary has no dikey units");
@@ -292,6 +341,8 @@ std::string ConcatOptions::Check() const {
     return "face_weights must be finite and >= 0";
   if (max_fallback_level < 0 || max_fallback_level > 3) return "max_fallback_level must be in 0-3";
   if (max_stream_candidates < 1) return "max_stream_candidates must be >= 1";
+  if (!(posture_radius >= 0) || !std::isfinite(posture_radius)) return "posture_radius must be >= 0";
+  if (posture_min_instances < 1) return "posture_min_instances must be >= 1";
   if (!(max_compression == 0 || (max_compression >= 1 && max_compression < 1e6)))
     return "max_compression must be 0 or >= 1";
   return "";
@@ -315,6 +366,66 @@ double MinimumJerk(double u) {
   u = std::clamp(u, 0.0, 1.0);
   return u * u * u * (10.0 + u * (-15.0 + 6.0 * u));
 }
+
+namespace {
+
+// ConcatOptions::posture_radius on a rendered track.
+void PullKeyPostures(const KeyClasses& classes, const ColumnSpread& spread, double rows,
+                     const std::vector<KeyTarget>& keys, const std::vector<int64_t>& key_frames, const ConcatOptions& o,
+                     HandTrack* out) {
+  const Eigen::Index P = out->hand_params.cols();
+  // Each column's spread over every frame, the floor of the classes' own.
+  Eigen::RowVectorXd all_sd;
+  {
+    const Eigen::ArrayXd mean = spread.sum / rows;
+    Eigen::ArrayXd sd = ((spread.sum_sq - rows * mean.square()).max(0.0) / std::max(rows - 1.0, 1.0)).sqrt();
+    const double big = sd.maxCoeff();
+    for (Eigen::Index j = 0; j < sd.size(); ++j)
+      if (!(sd(j) > 1e-12 * big)) sd(j) = 1.0;
+    all_sd = sd.head(P + 6).matrix().transpose();
+  }
+  std::map<std::string, PostureClass> made;
+  const double n = std::sqrt(static_cast<double>(P + 6));
+  const int64_t last = out->frames() - 1;
+  std::vector<int64_t> at;
+  std::vector<Eigen::RowVectorXd> corr;
+  out->postures.assign(keys.size(), KeyPosture{});
+  for (size_t i = 0; i < keys.size(); ++i) {
+    const int64_t f = std::clamp<int64_t>(key_frames[i], 0, last);
+    if (!at.empty() && f <= at.back()) continue;  // a key on the previous key's frame
+    Eigen::RowVectorXd c = Eigen::RowVectorXd::Zero(P + 6);
+    const std::string code = keys[i].code.Text();
+    const auto instances = classes.postures.find(code);
+    if (instances != classes.postures.end() && static_cast<int>(instances->second.size()) >= o.posture_min_instances) {
+      auto it = made.find(code);
+      if (it == made.end()) it = made.emplace(code, MakePostureClass(instances->second, 0.1 * all_sd)).first;
+      const PostureClass& pc = it->second;
+      Eigen::RowVectorXd v(P + 6);
+      v << out->hand_params.row(f), out->forearm_in_head.row(f);
+      const double dist = (v - pc.mean).cwiseQuotient(pc.sd).norm() / n;
+      out->postures[i].distance = dist;
+      if (dist > o.posture_radius) {
+        // Toward the exemplar, stopping posture_radius from it.
+        const double to_exemplar = (v - pc.exemplar).cwiseQuotient(pc.sd).norm() / n;
+        if (to_exemplar > o.posture_radius) {
+          c = (pc.exemplar - v) * (1.0 - o.posture_radius / to_exemplar);
+          out->postures[i].pulled = true;
+        }
+      }
+    }
+    at.push_back(f);
+    corr.push_back(std::move(c));
+  }
+  std::vector<Eigen::RowVectorXd> hand, pose;
+  for (const Eigen::RowVectorXd& c : corr) {
+    hand.push_back(c.head(P));
+    pose.push_back(c.tail(6));
+  }
+  AddRamped(at, hand, &out->hand_params);
+  AddRamped(at, pose, &out->forearm_in_head);
+}
+
+}  // namespace
 
 HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& keys, double duration_s,
                             const ConcatOptions& o) {
@@ -569,6 +680,7 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
     }
     out.keys.push_back(std::move(r));
   }
+  if (o.posture_radius > 0) PullKeyPostures(classes, spread, rows, keys, key_frames, o, &out);
   return out;
 }
 

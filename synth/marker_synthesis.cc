@@ -127,15 +127,29 @@ SpeedLimitResult LimitMarkerSpeed(const FaceModel& face, const HandModel& hand, 
   std::vector<double> jump(static_cast<size_t>(std::max<int64_t>(n, 1)), 0.0);
   for (int64_t f = 1; f < n; ++f) jump[static_cast<size_t>(f)] = MaxJump(take->markers, f);
   r.max_jump_before_mm = r.max_jump_after_mm = *std::max_element(jump.begin(), jump.end());
+  // How many frames beyond each violating transition are smoothed too:
+  // grows by one whenever a pass takes less than 1 % off the total excess
+  // over the limit (a stretch already moving at one speed above the limit,
+  // between frames that do not, is a fixed point of the kernel; only
+  // widening it slows it down).
+  auto excess = [&] {
+    double e = 0;
+    for (double j : jump) e += std::max(0.0, j - limit_mm);
+    return e;
+  };
+  int64_t widen = 0;
+  double previous_excess = excess();
   for (int pass = 0; pass < max_passes; ++pass) {
-    // Frames to smooth: both ends of every transition above the limit, when
-    // they and their neighbours have finite tracks.
+    // Frames to smooth: both ends of every transition above the limit (and
+    // `widen` more on each side), when they and their neighbours have finite
+    // tracks.
     std::vector<char> smooth(static_cast<size_t>(n), 0);
     bool any = false;
     for (int64_t f = 1; f < n; ++f) {
       if (jump[static_cast<size_t>(f)] <= limit_mm) continue;
-      for (int64_t g : {f - 1, f})
-        if (g >= 1 && g + 1 < n && RowsFinite(*tracks, g - 1) && RowsFinite(*tracks, g) && RowsFinite(*tracks, g + 1)) {
+      for (int64_t g = std::max<int64_t>(f - 1 - widen, 0); g <= std::min(f + widen, n - 1); ++g)
+        if (RowsFinite(*tracks, std::max<int64_t>(g - 1, 0)) && RowsFinite(*tracks, g) &&
+            RowsFinite(*tracks, std::min(g + 1, n - 1))) {
           smooth[static_cast<size_t>(g)] = 1;
           any = true;
         }
@@ -143,10 +157,12 @@ SpeedLimitResult LimitMarkerSpeed(const FaceModel& face, const HandModel& hand, 
     if (!any) break;
     const ParameterTracks before = *tracks;
     int64_t lo = n, hi = -1;
-    for (int64_t g = 1; g + 1 < n; ++g) {
+    for (int64_t g = 0; g < n; ++g) {
       if (!smooth[static_cast<size_t>(g)]) continue;
+      // The ends are held: their missing neighbour is themselves.
+      const int64_t prev = std::max<int64_t>(g - 1, 0), next = std::min(g + 1, n - 1);
       auto blend = [&](const Eigen::MatrixXd& from, Eigen::MatrixXd& to) {
-        to.row(g) = 0.25 * from.row(g - 1) + 0.5 * from.row(g) + 0.25 * from.row(g + 1);
+        to.row(g) = 0.25 * from.row(prev) + 0.5 * from.row(g) + 0.25 * from.row(next);
       };
       blend(before.face_params, tracks->face_params);
       blend(before.head_pose, tracks->head_pose);
@@ -178,6 +194,9 @@ SpeedLimitResult LimitMarkerSpeed(const FaceModel& face, const HandModel& hand, 
     for (int64_t g = std::max<int64_t>(1, lo); g <= std::min(n - 1, hi + 1); ++g)
       jump[static_cast<size_t>(g)] = MaxJump(take->markers, g);
     r.max_jump_after_mm = *std::max_element(jump.begin(), jump.end());
+    const double now = excess();
+    if (!(now < 0.99 * previous_excess)) ++widen;
+    previous_excess = now;
   }
   return r;
 }

@@ -67,7 +67,12 @@ Take MarkersFromParameters(const FaceModel& face, const HandModel& hand, const P
 // weighted 1 2 1; the movement is spread over more frames, its end points,
 // the keys' targets, untouched unless the transition is next to them) and
 // recomputes those frames' markers; it stops when no jump exceeds the limit
-// or after max_passes. Frames with NaN tracks and their neighbours are left
+// or after max_passes. A pass that takes less than 1 % off the total excess
+// over the limit widens the smoothing by one more frame on each side of
+// every transition above it (a stretch moving at one speed above the limit
+// is a fixed point of the kernel). The first and last frames count as held (their
+// missing neighbour is themselves: [1 3] / 4), so a movement that ends on the
+// take's last frame is spread too. Frames with NaN tracks and their neighbours are left
 // alone. Returns the number of frame smoothings made (0 = nothing was above
 // the limit). Throws InvalidInput as MarkersFromParameters, or when limit_mm
 // is not positive.

@@ -141,8 +141,8 @@ Synthesis Synthesize(const Utterance& utterance, const Dictionary& dictionary, c
       char line[200];
       std::snprintf(line, sizeof line,
                     "a marker still moves %.1f mm between two frames after the speed limit (%.1f mm): the tracks "
-                    "jump next to a gap or at an end",
-                    s.speed_limit.max_jump_after_mm, s.speed_limit_mm);
+                    "jump next to a gap, or %d passes were not enough",
+                    s.speed_limit.max_jump_after_mm, s.speed_limit_mm, options.speed_limit_passes);
       s.warnings.push_back(line);
     }
   }

@@ -259,6 +259,15 @@ double MaxMarkerJump(const MarkerArray& m) {
   return jumps.empty() ? 0.0 : *std::max_element(jumps.begin(), jumps.end());
 }
 
+// A still cuer: every track row the fixture's row `a` (finite).
+void HoldStill(int64_t a, ParameterTracks* t) {
+  for (Eigen::MatrixXd* m : {&t->face_params, &t->head_pose, &t->hand_params, &t->forearm_in_head}) {
+    const Eigen::RowVectorXd row = m->row(a);
+    ASSERT_TRUE(row.allFinite());
+    m->rowwise() = row;
+  }
+}
+
 TEST_F(MarkerSynthesis, SpeedLimitSpreadsAFastMovementAndKeepsItsEnds) {
   ASSERT_NE(fixture_, nullptr);
   const Fixture& fx = *fixture_;
@@ -271,11 +280,7 @@ TEST_F(MarkerSynthesis, SpeedLimitSpreadsAFastMovementAndKeepsItsEnds) {
   // 60 mm sideways (in the head frame) in 4 frames from frame a and stays
   // there: 15 mm per frame, against a limit of 5 mm.
   const int64_t a = n / 2;
-  for (Eigen::MatrixXd* m : {&t.face_params, &t.head_pose, &t.hand_params, &t.forearm_in_head}) {
-    const Eigen::RowVectorXd row = m->row(a);
-    ASSERT_TRUE(row.allFinite());
-    m->rowwise() = row;
-  }
+  HoldStill(a, &t);
   const double limit = 5.0;
   for (int64_t f = a + 1; f < n; ++f) t.forearm_in_head(f, 3) += 60.0 * std::min<double>(1.0, (f - a) / 4.0);
   Take take = MarkersFromParameters(face, hand, t, "fast");
@@ -309,6 +314,39 @@ TEST_F(MarkerSynthesis, SpeedLimitSpreadsAFastMovementAndKeepsItsEnds) {
               unlimited.forearm_in_head(after, 3) - unlimited.forearm_in_head(a - 31, 3), 1e-9);
 
   EXPECT_THROW(LimitMarkerSpeed(face, hand, 0.0, 10, &t, &take), InvalidInput);
+}
+
+TEST_F(MarkerSynthesis, SpeedLimitSpreadsAMovementAtTheTakesEndAndALongSteadyOne) {
+  ASSERT_NE(fixture_, nullptr);
+  const Fixture& fx = *fixture_;
+  const FaceModel& face = *fx.models.face;
+  const HandModel& hand = *fx.models.hand;
+  ParameterTracks t = fx.Tracks();
+  const int64_t n = t.frames();
+  ASSERT_GE(n, 120);
+  const int64_t a = n / 3;
+  HoldStill(a, &t);
+  // The forearm moves (in the head frame) 6 mm per frame for 12 frames from
+  // frame a: 72 mm, which at a limit of 5 mm per frame needs at least 15
+  // transitions, more than the 14 around the movement; and 60 mm sideways in
+  // the take's last 4 frames (15 mm per frame), ending on its last frame.
+  for (int64_t f = a + 1; f < n; ++f)
+    t.forearm_in_head(f, 4) += 6.0 * static_cast<double>(std::min<int64_t>(f - a, 12));
+  for (int64_t f = n - 4; f < n; ++f) t.forearm_in_head(f, 3) += 15.0 * static_cast<double>(f - (n - 5));
+  const double limit = 5.0;
+  const ParameterTracks unlimited = t;
+  Take take = MarkersFromParameters(face, hand, t, "fast");
+  ASSERT_GT(MaxMarkerJump(take.markers), 14.0);
+  const SpeedLimitResult r = LimitMarkerSpeed(face, hand, limit, 2000, &t, &take);
+  EXPECT_LE(MaxMarkerJump(take.markers), limit + 1e-6);
+  EXPECT_LE(r.max_jump_after_mm, limit + 1e-6);
+  // Both movements still go their whole way (the frames far from them are
+  // untouched), and the last frame was allowed to move toward its neighbour.
+  EXPECT_EQ(t.forearm_in_head.row(0), unlimited.forearm_in_head.row(0));
+  const int64_t mid = (a + 12 + n - 5) / 2;
+  EXPECT_NEAR(t.forearm_in_head(mid, 4) - t.forearm_in_head(0, 4), 72.0, 1e-6);
+  EXPECT_NEAR(t.forearm_in_head(mid, 3), unlimited.forearm_in_head(mid, 3), 1e-6);
+  EXPECT_LT(t.forearm_in_head(n - 1, 3), unlimited.forearm_in_head(n - 1, 3) - 1.0);
 }
 
 }  // namespace

@@ -91,6 +91,9 @@ TEST(SayOptions, RequiredOptionsAndReasons) {
   o.target_weight = -1;
   EXPECT_EQ(o.Check(), "--target-weight must be >= 0");
   o = Valid();
+  o.posture_radius = std::nan("");
+  EXPECT_EQ(o.Check(), "--posture-radius must be >= 0");
+  o = Valid();
   o.face_units = "triphones";
   EXPECT_EQ(o.Check(), "--face-units must be diphones or fragments");
   o = Valid();
@@ -231,6 +234,25 @@ TEST_F(SayJob, SynthesisesACorpusSentenceFromWholeDikeys) {
   // The sentence is in the corpus: every succession exists whole.
   EXPECT_EQ(s["fallback"]["whole"], static_cast<int>(keys.size()) - 1);
   EXPECT_EQ(s["fallback"]["interpolated"], 0);
+  // The key posture pull (on by default) reports every key: its distance
+  // from its code's mean posture in the code's standard deviations (null
+  // for codes with fewer than 5 instances) and whether it was moved, only
+  // ever when farther than the radius 0.5.
+  ASSERT_EQ(s["key_plan"].size(), keys.size());
+  int measured = 0;
+  for (const json& k : s["key_plan"]) {
+    ASSERT_TRUE(k.contains("posture_distance") && k.contains("posture_pulled")) << k.dump();
+    if (k["posture_distance"].is_number()) {
+      ++measured;
+      EXPECT_GE(k["posture_distance"].get<double>(), 0.0);
+      if (k["posture_pulled"].get<bool>()) {
+        EXPECT_GT(k["posture_distance"].get<double>(), 0.5) << k.dump();
+      }
+    } else {
+      EXPECT_FALSE(k["posture_pulled"].get<bool>());
+    }
+  }
+  EXPECT_GE(measured, 1);
   // At least 90 % of the keys recognised at their targets (a key model trained on 3 sentences).
   EXPECT_GE(r["check"]["keys"]["accuracy"].get<double>(), 0.9) << r["check"].dump() << "\n" << s.dump();
   // The speed limit: the corpus's largest jump (same frame rate), which the

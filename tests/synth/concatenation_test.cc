@@ -294,6 +294,74 @@ TEST(ConcatenateDikeys, TargetCostLeavesOutUnitsCutAtAnApproachedKey) {
               ::testing::ThrowsMessage<InvalidInput>(HasSubstr("target_weight must be >= 0")));
 }
 
+TEST(ConcatenateDikeys, PosturePullMovesAnApproachedKeyTowardItsCodesExemplar) {
+  // Key 12 was only approached in one take: its 00 -> 12 unit A ends, and
+  // its 12 -> 35 unit B starts, 0.8 above shape 2's value in hand parameter
+  // 1 and 20 mm beyond placement 1's in forearm tx; they are the only units
+  // of their successions, so they are chosen. Four more instances of code
+  // 12 (the ends of two 35 -> 12 units, the starts of two 12 -> 00 units)
+  // are exact: code 12's mean is a third of the way (0.267, 6.67 mm), its sd
+  // 0.377 and 9.43 mm (population), 1.414 sd from the approached posture
+  // in both; its exemplar (the instance nearest the mean) is exact. Codes
+  // 00 and 35 have four instances each.
+  DikeyUnit a = Dikey("00", "12", 0.30), b = Dikey("12", "35", 0.30, 0.8);
+  for (Eigen::Index r = 0; r < a.frames(); ++r) {
+    const double u = static_cast<double>(r) / static_cast<double>(a.frames() - 1);
+    a.hand_params(r, 0) += 0.8 * u;
+    a.forearm_in_head(r, 3) += 20.0 * u;
+    b.forearm_in_head(r, 3) += 20.0 * (1.0 - u);
+  }
+  const Dictionary d = DikeyDictionary({a, b, Dikey("35", "12", 0.3), Dikey("12", "00", 0.3), Dikey("35", "12", 0.3),
+                                        Dikey("12", "00", 0.3), Dikey("35", "00", 0.4)});
+  const auto keys = Keys({{"00", 0.2}, {"12", 0.5}, {"35", 0.8}, {"00", 1.2}});
+  const HandTrack plain = ConcatenateDikeys(d, keys, 1.5);
+  ASSERT_EQ(plain.keys[0].units, std::vector<int>{0});
+  ASSERT_EQ(plain.keys[1].units, std::vector<int>{1});
+  EXPECT_TRUE(plain.postures.empty());
+  EXPECT_NEAR(plain.hand_params(Frame(0.5), 0), ShapeValue(2)(0) + 0.8, kTol);
+
+  // RMS over the 3 + 6 values: from the mean sqrt(2 x 1.414^2 / 9) = 2/3;
+  // from the exemplar (2.121 sd in both) 1.0, so radius 0.5 moves it half
+  // way: 0.4 above and 10 mm beyond.
+  ConcatOptions o;
+  o.posture_radius = 0.5;
+  const HandTrack t = ConcatenateDikeys(d, keys, 1.5, o);
+  ASSERT_EQ(t.postures.size(), 4u);
+  EXPECT_NEAR(t.postures[1].distance, 2.0 / 3.0, 1e-9);
+  EXPECT_TRUE(t.postures[1].pulled);
+  for (size_t i : {0u, 2u, 3u}) {
+    EXPECT_TRUE(std::isnan(t.postures[i].distance)) << i;  // 4 instances < posture_min_instances 5
+    EXPECT_FALSE(t.postures[i].pulled) << i;
+  }
+  EXPECT_NEAR(t.hand_params(Frame(0.5), 0), ShapeValue(2)(0) + 0.4, 1e-9);
+  EXPECT_NEAR(t.forearm_in_head(Frame(0.5), 3), ForearmValue(1)(3) + 10.0, 1e-9);
+  // Only those two values move; the other keys' frames keep their postures,
+  // and halfway through each neighbouring slot the minimum-jerk ramp has
+  // made half the correction.
+  Eigen::RowVectorXd expected = plain.hand_params.row(Frame(0.5));
+  expected(0) -= 0.4;
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(Frame(0.5)), expected), 1e-9);
+  for (double time : {0.2, 0.8, 1.2, 1.4}) {
+    EXPECT_LT(MaxAbsDiff(t.hand_params.row(Frame(time)), plain.hand_params.row(Frame(time))), 1e-12) << time;
+    EXPECT_LT(MaxAbsDiff(t.forearm_in_head.row(Frame(time)), plain.forearm_in_head.row(Frame(time))), 1e-12) << time;
+  }
+  EXPECT_NEAR(t.hand_params(Frame(0.35), 0) - plain.hand_params(Frame(0.35), 0), -0.2, 1e-9);
+  EXPECT_NEAR(t.forearm_in_head(Frame(0.65), 3) - plain.forearm_in_head(Frame(0.65), 3), -5.0, 1e-9);
+
+  // Radius 2/3 or more leaves it; a code needing more instances is left.
+  o.posture_radius = 0.7;
+  EXPECT_NEAR(ConcatenateDikeys(d, keys, 1.5, o).hand_params(Frame(0.5), 0), ShapeValue(2)(0) + 0.8, kTol);
+  o.posture_radius = 0.5;
+  o.posture_min_instances = 7;
+  const HandTrack few = ConcatenateDikeys(d, keys, 1.5, o);
+  EXPECT_NEAR(few.hand_params(Frame(0.5), 0), ShapeValue(2)(0) + 0.8, kTol);
+  EXPECT_TRUE(std::isnan(few.postures[1].distance));
+  o.posture_min_instances = 5;
+  o.posture_radius = -1;
+  EXPECT_THAT([&] { ConcatenateDikeys(d, keys, 1.5, o); },
+              ::testing::ThrowsMessage<InvalidInput>(HasSubstr("posture_radius must be >= 0")));
+}
+
 TEST(ConcatenateDikeys, ConcatenationCostIsTheWeightedRmsOfTheNormalisedJump) {
   // Only the discontinuous candidate: the path's cost is its one jump, 0.8 in
   // hand parameter 1, divided by that column's standard deviation over every

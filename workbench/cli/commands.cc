@@ -775,9 +775,13 @@ class SayCommand : public Command {
                      "Unit selection: cost per standardised distance of a unit's key postures from their classes' "
                      "means (0 = off)")
         ->capture_default_str();
-    sub_->add_flag("--keep-key-postures", options_.keep_key_postures,
-                   "A dikey trimmed to fit a short slot still starts at its key's posture (more keys reached, "
-                   "placement targets earlier; docs/synthesis.md)");
+    sub_->add_flag("--keep-key-postures,!--no-keep-key-postures", options_.keep_key_postures,
+                   "A dikey trimmed to fit a short slot still starts at its key's posture (default: on; more keys "
+                   "reached; docs/synthesis.md)");
+    sub_->add_option("--posture-radius", options_.posture_radius,
+                     "Key posture pull: a hand farther than this (in its key code's standard deviations) from the "
+                     "code's mean posture is moved toward the code's exemplar (0 = off; docs/synthesis.md)")
+        ->capture_default_str();
     sub_->add_option("--face-units", options_.face_units,
                      "The face from diphones (Viterbi) or fragments (seed-003: greedy longest match, phone-aligned "
                      "warp, RBF resampling, blended overlaps)")

@@ -90,6 +90,7 @@ std::string SayOptions::Check() const {
   if (!(selection_weight >= 0 && selection_weight < 1e6)) return "--selection-weight must be >= 0";
   if (!(concatenation_weight >= 0 && concatenation_weight < 1e6)) return "--concatenation-weight must be >= 0";
   if (!(target_weight >= 0 && target_weight < 1e6)) return "--target-weight must be >= 0";
+  if (!(posture_radius >= 0 && posture_radius < 1e6)) return "--posture-radius must be >= 0";
   if (face_units != "diphones" && face_units != "fragments") return "--face-units must be diphones or fragments";
   if (dict::Resampling r; !dict::ParseResampling(resampling, &r)) return "--resampling must be rbf or linear";
   if (!(blend >= 0 && blend <= 1)) return "--blend must be in [0, 1]";
@@ -131,6 +132,7 @@ json Say(const SayOptions& options, Progress& progress) {
   so.concat.concatenation_weight = options.concatenation_weight;
   so.concat.target_weight = options.target_weight;
   so.concat.trim_keeps_key_posture = options.keep_key_postures;
+  so.concat.posture_radius = options.posture_radius;
   so.face_fragments = options.face_units == "fragments";
   dict::ParseResampling(options.resampling, &so.fragments.resampling);
   so.fragments.blend_fraction = options.blend;
@@ -208,6 +210,10 @@ json Say(const SayOptions& options, Progress& progress) {
     for (size_t k = 0; k < s.plan.keys.size(); ++k) {
       const dict::PlannedKey& p = s.plan.keys[k];
       json kj = {{"code", p.code.Text()}, {"target_s", p.target_s}, {"timing", p.source}};
+      if (k < s.hand.postures.size()) {
+        kj["posture_distance"] = Number(s.hand.postures[k].distance);
+        kj["posture_pulled"] = s.hand.postures[k].pulled;
+      }
       if (k > 0 && k - 1 < s.hand.keys.size()) {
         const dict::KeyReport& rep = s.hand.keys[k - 1];
         kj["slot_s"] = p.target_s - s.plan.keys[k - 1].target_s;

@@ -38,7 +38,8 @@ struct SayOptions {
   double selection_weight = 10;         // per s of RMS duration mismatch (ConcatOptions)
   double concatenation_weight = 1;      // per standardised RMS jump (ConcatOptions)
   double target_weight = 10;            // per standardised distance of a key posture from its class (ConcatOptions)
-  bool keep_key_postures = false;       // a trimmed dikey still starts at its key's posture (ConcatOptions)
+  bool keep_key_postures = true;        // a trimmed dikey still starts at its key's posture (ConcatOptions)
+  double posture_radius = 0.5;          // key posture pull toward the code's exemplar (ConcatOptions), 0 = off
   std::string face_units = "diphones";  // "diphones" (Viterbi) or "fragments" (seed-003, synth/fragments.h)
   std::string resampling = "rbf";       // fragments: "rbf" (inverse multiquadric) or "linear"
   double rbf_shape = 2;                 // fragments: inverse-multiquadric shape, in smallest sample spacings
