@@ -244,11 +244,13 @@ struct DikeyCandidate {
 struct KeyClasses {
   std::map<int, Mean> shape, placement;
   std::map<std::string, std::vector<Eigen::RowVectorXd>> postures;
+  bool keep_postures = false;  // fill `postures` (only the pull needs them)
   void Add(const KeyCode& code, const DikeyUnit& u, Eigen::Index row) {
     shape[code.shape].Add(u.hand_params.row(row));
     Eigen::RowVectorXd pose(12);
     pose << u.forearm_in_head.row(row), u.head_pose.row(row);
     placement[code.placement].Add(pose);
+    if (!keep_postures) return;
     Eigen::RowVectorXd posture(u.hand_params.cols() + 6);
     posture << u.hand_params.row(row), u.forearm_in_head.row(row);
     postures[code.Text()].push_back(std::move(posture));
@@ -462,6 +464,7 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
   };
 
   KeyClasses classes;
+  classes.keep_postures = o.posture_radius > 0;
   for (const DikeyUnit& u : d.dikeys) {
     classes.Add(u.from, u, 0);
     classes.Add(u.to, u, u.frames() - 1);
