@@ -240,6 +240,22 @@ TEST_F(SayJob, SynthesisesACorpusSentenceFromWholeDikeys) {
   // ever when farther than the radius 0.5.
   ASSERT_EQ(s["key_plan"].size(), keys.size());
   int measured = 0;
+  for (size_t i = 0; i < keys.size(); ++i) {
+    // Each key's type and its syllable's acoustic onset (A1) on the output
+    // clock: the keys the LfPC rules gave the sentence, rests without A1.
+    const json& k = s["key_plan"][i];
+    EXPECT_EQ(k["code"], keys[i].Code()) << i;
+    if (keys[i].type == KeyType::kRest) {
+      EXPECT_EQ(k["type"], "rest") << i;
+      EXPECT_TRUE(k["a1_s"].is_null()) << i;
+    } else {
+      EXPECT_EQ(k["type"], keys[i].type == KeyType::kCV ? "CV" : keys[i].type == KeyType::kVowelAlone ? "V" : "C") << i;
+      ASSERT_TRUE(k["a1_s"].is_number()) << i;
+      EXPECT_GT(k["a1_s"].get<double>(), 0.0) << i;
+      EXPECT_LT(k["a1_s"].get<double>(), s["duration_s"].get<double>()) << i;
+      EXPECT_LT(std::abs(k["target_s"].get<double>() - k["a1_s"].get<double>()), 0.4) << i;
+    }
+  }
   for (const json& k : s["key_plan"]) {
     ASSERT_TRUE(k.contains("posture_distance") && k.contains("posture_pulled")) << k.dump();
     if (k["posture_distance"].is_number()) {

@@ -10,6 +10,7 @@
 #include "analysis/keys/hand_features.h"
 #include "analysis/keys/key_decoding.h"
 #include "analysis/keys/key_model.h"
+#include "analysis/phasing/phasing_stats.h"
 #include "core/error.h"
 #include "core/markerset.h"
 #include "io/c3d/c3d.h"
@@ -209,7 +210,11 @@ json Say(const SayOptions& options, Progress& progress) {
     json key_list = json::array();
     for (size_t k = 0; k < s.plan.keys.size(); ++k) {
       const dict::PlannedKey& p = s.plan.keys[k];
-      json kj = {{"code", p.code.Text()}, {"target_s", p.target_s}, {"timing", p.source}};
+      json kj = {{"code", p.code.Text()},
+                 {"type", phasing::KeyTypeLabel(p.type)},
+                 {"a1_s", Number(p.a1_s)},
+                 {"target_s", p.target_s},
+                 {"timing", p.source}};
       if (k < s.hand.postures.size()) {
         kj["posture_distance"] = Number(s.hand.postures[k].distance);
         kj["posture_pulled"] = s.hand.postures[k].pulled;
