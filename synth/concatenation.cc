@@ -54,19 +54,25 @@ struct ColumnSpread {
   }
 };
 
-// Per-column factors a_c = sqrt(w_c / Σw) / σ_c, so that the weighted RMS
-// jump of Δ is ‖a ∘ Δ‖. σ_c = the column's standard deviation over `rows`
-// frames (1 when it is not above 1e-12 of the largest, or there is one row).
-Eigen::VectorXd JumpFactors(const ColumnSpread& spread, double rows, const Eigen::VectorXd& weights) {
-  const Eigen::Index c = weights.size();
+// Standard deviations of the first c columns over `rows` frames (1 where
+// not above 1e-12 of the largest, or for every column when there is one row).
+Eigen::VectorXd ColumnSigma(const ColumnSpread& spread, double rows, Eigen::Index c) {
   Eigen::VectorXd sigma = Eigen::VectorXd::Ones(c);
   if (rows > 1) {
-    const Eigen::ArrayXd mean = spread.sum / rows;
-    sigma = ((spread.sum_sq - rows * mean.square()).max(0.0) / (rows - 1)).sqrt().matrix();
+    const Eigen::ArrayXd mean = spread.sum.head(c) / rows;
+    sigma = ((spread.sum_sq.head(c) - rows * mean.square()).max(0.0) / (rows - 1)).sqrt().matrix();
     const double big = sigma.maxCoeff();
     for (Eigen::Index j = 0; j < c; ++j)
       if (!(sigma(j) > 1e-12 * big) || !(sigma(j) > 0)) sigma(j) = 1.0;
   }
+  return sigma;
+}
+
+// Per-column factors a_c = sqrt(w_c / Σw) / σ_c, so that the weighted RMS
+// jump of Δ is ‖a ∘ Δ‖. σ_c = ColumnSigma.
+Eigen::VectorXd JumpFactors(const ColumnSpread& spread, double rows, const Eigen::VectorXd& weights) {
+  const Eigen::Index c = weights.size();
+  const Eigen::VectorXd sigma = ColumnSigma(spread, rows, c);
   const double total = weights.sum();
   Eigen::VectorXd a(c);
   for (Eigen::Index j = 0; j < c; ++j) a(j) = total > 0 ? std::sqrt(weights(j) / total) / sigma(j) : 0.0;
@@ -377,15 +383,7 @@ void PullKeyPostures(const KeyClasses& classes, const ColumnSpread& spread, doub
                      HandTrack* out) {
   const Eigen::Index P = out->hand_params.cols();
   // Each column's spread over every frame, the floor of the classes' own.
-  Eigen::RowVectorXd all_sd;
-  {
-    const Eigen::ArrayXd mean = spread.sum / rows;
-    Eigen::ArrayXd sd = ((spread.sum_sq - rows * mean.square()).max(0.0) / std::max(rows - 1.0, 1.0)).sqrt();
-    const double big = sd.maxCoeff();
-    for (Eigen::Index j = 0; j < sd.size(); ++j)
-      if (!(sd(j) > 1e-12 * big)) sd(j) = 1.0;
-    all_sd = sd.head(P + 6).matrix().transpose();
-  }
+  const Eigen::RowVectorXd all_sd = ColumnSigma(spread, rows, P + 6).transpose();
   std::map<std::string, PostureClass> made;
   const double n = std::sqrt(static_cast<double>(P + 6));
   const int64_t last = out->frames() - 1;
