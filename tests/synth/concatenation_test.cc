@@ -356,8 +356,14 @@ TEST(ConcatenateDikeys, PosturePullMovesAnApproachedKeyTowardItsCodesExemplar) {
   const HandTrack few = ConcatenateDikeys(d, keys, 1.5, o);
   EXPECT_NEAR(few.hand_params(Frame(0.5), 0), ShapeValue(2)(0) + 0.8, kTol);
   EXPECT_TRUE(std::isnan(few.postures[1].distance));
+  o.posture_min_instances = 0;
+  EXPECT_THAT([&] { ConcatenateDikeys(d, keys, 1.5, o); },
+              ::testing::ThrowsMessage<InvalidInput>(HasSubstr("posture_min_instances must be >= 1")));
   o.posture_min_instances = 5;
   o.posture_radius = -1;
+  EXPECT_THAT([&] { ConcatenateDikeys(d, keys, 1.5, o); },
+              ::testing::ThrowsMessage<InvalidInput>(HasSubstr("posture_radius must be >= 0")));
+  o.posture_radius = std::numeric_limits<double>::infinity();
   EXPECT_THAT([&] { ConcatenateDikeys(d, keys, 1.5, o); },
               ::testing::ThrowsMessage<InvalidInput>(HasSubstr("posture_radius must be >= 0")));
 }
