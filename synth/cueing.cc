@@ -110,4 +110,28 @@ std::vector<Key> CueKeys(const std::vector<Phone>& phones) {
   return out;
 }
 
+const char* KeyTypeText(KeyType type) {
+  switch (type) {
+    case KeyType::kCV:
+      return "CV";
+    case KeyType::kVowelAlone:
+      return "V";
+    case KeyType::kConsonantAlone:
+      return "C";
+    case KeyType::kRest:
+      break;
+  }
+  return "rest";
+}
+
+bool ParseKeyTypeText(const std::string& text, KeyType* type) {
+  for (KeyType t : {KeyType::kRest, KeyType::kCV, KeyType::kConsonantAlone, KeyType::kVowelAlone}) {
+    if (text == KeyTypeText(t)) {
+      *type = t;
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace csw

@@ -8,6 +8,9 @@
 namespace csw {
 
 enum class KeyType { kRest, kCV, kConsonantAlone, kVowelAlone };
+const char* KeyTypeText(KeyType type);  // "CV", "V", "C", "rest"
+// The inverse of KeyTypeText; false (and *type unchanged) for any other text.
+bool ParseKeyTypeText(const std::string& text, KeyType* type);
 
 // One key: placement P (0-5) and shape S (0-8), written "PS" (e.g. "24"); "00" is rest.
 struct Key {

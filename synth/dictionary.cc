@@ -60,6 +60,10 @@ std::vector<DikeyUnit> ExtractDikeys(const TakeSeries& s, const DikeyOptions& op
     throw InvalidInput(where + ": " + std::to_string(s.syllable_onset_s.size()) + " syllable onsets for " +
                        std::to_string(s.keys.size()) + " keys");
   }
+  if (!s.key_type.empty() && s.key_type.size() != s.keys.size()) {
+    throw InvalidInput(where + ": " + std::to_string(s.key_type.size()) + " key types for " +
+                       std::to_string(s.keys.size()) + " keys");
+  }
   if (!s.placement_target_s.empty() && s.placement_target_s.size() != s.keys.size()) {
     throw InvalidInput(where + ": " + std::to_string(s.placement_target_s.size()) + " placement targets for " +
                        std::to_string(s.keys.size()) + " keys");
@@ -75,6 +79,10 @@ std::vector<DikeyUnit> ExtractDikeys(const TakeSeries& s, const DikeyOptions& op
   std::vector<double> onsets(keys.size(), kNaN);
   const size_t shift = (options.add_rests && (s.keys.empty() || !s.keys.front().code.IsRest())) ? 1 : 0;
   for (size_t i = 0; i < s.syllable_onset_s.size(); ++i) onsets[i + shift] = s.syllable_onset_s[i];
+  std::vector<std::optional<KeyType>> types(keys.size());
+  for (size_t i = 0; i < s.key_type.size(); ++i) types[i + shift] = s.key_type[i];
+  for (size_t i = 0; i < keys.size(); ++i)
+    if (keys[i].code.IsRest()) types[i] = KeyType::kRest;
   std::vector<double> lags(keys.size(), kNaN);
   for (size_t i = 0; i < s.placement_target_s.size(); ++i)
     if (std::isfinite(s.placement_target_s[i])) lags[i + shift] = s.placement_target_s[i] - s.keys[i].time_s;
@@ -115,6 +123,7 @@ std::vector<DikeyUnit> ExtractDikeys(const TakeSeries& s, const DikeyOptions& op
           RelativePose(s.head_pose.row(f0 + r).transpose(), s.forearm_pose.row(f0 + r).transpose()).transpose();
     }
     u.phasing_s = keys[i + 1].time_s - onsets[i + 1];  // NaN when the onset is unknown
+    u.to_type = types[i + 1];
     u.from_placement_lag_s = lags[i];
     u.to_placement_lag_s = lags[i + 1];
     out.push_back(std::move(u));

@@ -13,11 +13,13 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/labels.h"
 #include "core/take.h"
+#include "synth/cueing.h"
 
 namespace csw {
 
@@ -39,6 +41,11 @@ struct TakeSeries {
   // Acoustic onset (s) of the syllable each key codes, one per mark, NaN when
   // unknown (rests, or no phone tier): gives DikeyUnit::phasing_s.
   std::vector<double> syllable_onset_s;
+  // The LfPC type of each mark's key (CV, lone V, lone C; kRest for rests),
+  // one per mark, empty = unknown: gives DikeyUnit::to_type. A1 is the
+  // consonant onset for CV and lone-C keys and the vowel onset for lone-V
+  // keys, so phasing_s of different types are not comparable.
+  std::vector<KeyType> key_type;
   // Placement target time (s) of each mark's key, one per mark, NaN when
   // unknown (empty = none known): the placement arrives after the shape
   // target the mark holds (the placement_targets tier). Gives the units'
@@ -68,6 +75,10 @@ struct DikeyUnit {
   // The arriving key's target time minus the acoustic onset of its syllable
   // (s; negative = the hand arrives before the sound); NaN when unknown.
   double phasing_s = 0;
+  // The arriving key's type (whose A1 phasing_s is measured from); empty when
+  // unknown. One code may be of two types: shape 5 at a vowel placement is a
+  // lone vowel or a CV key of [m t f].
+  std::optional<KeyType> to_type;
   // Placement target minus shape target (s) of the key left and of the key
   // reached, NaN when unknown: the leaving key's placement arrives
   // from_placement_lag_s after the unit's first row (in its rows when

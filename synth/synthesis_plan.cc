@@ -96,25 +96,29 @@ SynthesisPlan PlanKeys(const std::vector<Key>& keys, const std::vector<Phone>& p
   };
 
   // Dictionary statistics: mean phasing per succession and per arriving key
-  // code (a unit does not store its key's type, and shape 5 at a vowel
-  // placement may be a lone vowel or a CV key: the code is the finest pool
-  // that never mixes keys of different codes).
-  std::map<std::string, std::pair<double, int>> by_succession;
-  std::map<std::string, std::pair<double, int>> by_arriving;
+  // code, each for one key type (A1 differs between types, and shape 5 at a
+  // vowel placement may be a lone vowel or a CV key of [m t f]), and per key
+  // type. Units of unknown type (dictionaries before the types) pool as "?".
+  using Sum = std::pair<double, int>;
+  std::map<std::string, Sum> by_succession;
+  std::map<std::string, Sum> by_arriving;
+  std::map<std::string, Sum> by_type;
   std::vector<double> leave_rest, reach_rest, all_durations;
   std::map<std::string, std::vector<double>> durations;
+  auto add = [](Sum& s, double v) {
+    s.first += v;
+    ++s.second;
+  };
   for (const DikeyUnit& u : dictionary.dikeys) {
     durations[SuccessionKey(u.from, u.to)].push_back(u.duration_s());
     all_durations.push_back(u.duration_s());
     if (u.from.IsRest() && !u.to.IsRest()) leave_rest.push_back(u.duration_s());
     if (u.to.IsRest() && !u.from.IsRest()) reach_rest.push_back(u.duration_s());
     if (!std::isfinite(u.phasing_s) || u.to.IsRest()) continue;
-    auto& s = by_succession[SuccessionKey(u.from, u.to)];
-    s.first += u.phasing_s;
-    ++s.second;
-    auto& a = by_arriving[u.to.Text()];
-    a.first += u.phasing_s;
-    ++a.second;
+    const std::string tag = std::string("|") + (u.to_type ? KeyTypeText(*u.to_type) : "?");
+    add(by_succession[SuccessionKey(u.from, u.to) + tag], u.phasing_s);
+    add(by_arriving[u.to.Text() + tag], u.phasing_s);
+    if (u.to_type) add(by_type[tag], u.phasing_s);
   }
   const double leave = leave_rest.empty() ? options.default_rest_s : Median(leave_rest);
   const double reach = reach_rest.empty() ? options.default_rest_s : Median(reach_rest);
@@ -149,16 +153,25 @@ SynthesisPlan PlanKeys(const std::vector<Key>& keys, const std::vector<Phone>& p
     p.target_s = global;
     p.source = "global";
     if (options.rule == PhasingRule::kPerDikey) {
-      const auto s = by_succession.find(SuccessionKey(previous, p.code));
-      const auto a = by_arriving.find(p.code.Text());
-      if (s != by_succession.end()) {
-        const double k = a != by_arriving.end() ? options.shrinkage_units : 0.0;
-        const double code_mean = a != by_arriving.end() ? a->second.first / a->second.second : 0.0;
-        p.target_s = p.a1_s + (s->second.first + k * code_mean) / (s->second.second + k);
-        p.source = "dikey";
-      } else if (a != by_arriving.end()) {
-        p.target_s = p.a1_s + a->second.first / a->second.second;
-        p.source = "code";
+      // This key's type first, then units of unknown type, then the type's mean.
+      for (const std::string& tag : {std::string("|") + KeyTypeText(key.type), std::string("|?")}) {
+        const auto s = by_succession.find(SuccessionKey(previous, p.code) + tag);
+        const auto a = by_arriving.find(p.code.Text() + tag);
+        if (s != by_succession.end()) {
+          const double k = a != by_arriving.end() ? options.shrinkage_units : 0.0;
+          const double code_mean = a != by_arriving.end() ? a->second.first / a->second.second : 0.0;
+          p.target_s = p.a1_s + (s->second.first + k * code_mean) / (s->second.second + k);
+          p.source = "dikey";
+        } else if (a != by_arriving.end()) {
+          p.target_s = p.a1_s + a->second.first / a->second.second;
+          p.source = "code";
+        }
+        if (p.source != "global") break;
+      }
+      const auto t = by_type.find(std::string("|") + KeyTypeText(key.type));
+      if (p.source == "global" && t != by_type.end()) {
+        p.target_s = p.a1_s + t->second.first / t->second.second;
+        p.source = "type";
       }
     }
     cued.push_back(p);

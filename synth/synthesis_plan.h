@@ -38,7 +38,9 @@ struct PlannedKey {
   double a1_s = 0;      // the syllable's acoustic onset (output clock, lead-in included); NaN for rests
   double target_s = 0;  // when the hand reaches the key (output clock)
   // Which rule gave target_s: "global", "dikey" (the succession's mean),
-  // "code" (the arriving code's mean), "rest"; "+pushed" appended when the
+  // "code" (the arriving code's mean), "type" (the mean of the key type's
+  // units), "rest"; each mean over units of this key's type (or of unknown
+  // type when the dictionary has none of it); "+pushed" appended when the
   // minimum interval moved it.
   std::string source;
 };

@@ -133,19 +133,7 @@ double VowelOnset(const Key& key, const std::vector<Phone>& phones) {
   return phones[static_cast<size_t>(key.vowel_phone)].start_s;
 }
 
-const char* KeyTypeLabel(KeyType type) {
-  switch (type) {
-    case KeyType::kCV:
-      return "CV";
-    case KeyType::kVowelAlone:
-      return "V";
-    case KeyType::kConsonantAlone:
-      return "C";
-    case KeyType::kRest:
-      break;
-  }
-  return "rest";
-}
+const char* KeyTypeLabel(KeyType type) { return KeyTypeText(type); }
 
 std::vector<double> RelativeTimesMs(const std::vector<PhasingKeyRow>& rows, PhasingMethod method,
                                     PhasingReference reference, KeyType type, Component component, Landmark landmark) {

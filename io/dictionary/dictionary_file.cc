@@ -197,7 +197,7 @@ void SaveDictionaryFile(const std::string& path, const dict::Dictionary& d) {
     const size_t n = d.dikeys.size();
     Handle g = h5::CreateGroup(f, "dikeys", where, "/dikeys");
     h5::WriteAttr(g.get(), "count", static_cast<int64_t>(n), where, "/dikeys");
-    std::vector<std::string> take(n), from_code(n), to_code(n);
+    std::vector<std::string> take(n), from_code(n), to_code(n), to_type(n);
     std::vector<int64_t> key_index(n), from_placement(n), from_shape(n), to_placement(n), to_shape(n), first_frame(n),
         offset(n), frames(n);
     std::vector<double> start_s(n), end_s(n), duration_s(n), phasing_s(n), rate_hz(n), from_lag(n), to_lag(n);
@@ -207,6 +207,7 @@ void SaveDictionaryFile(const std::string& path, const dict::Dictionary& d) {
       take[i] = u.take;
       from_code[i] = u.from.Text();
       to_code[i] = u.to.Text();
+      to_type[i] = u.to_type ? KeyTypeText(*u.to_type) : "";
       key_index[i] = u.index;
       from_placement[i] = u.from.placement;
       from_shape[i] = u.from.shape;
@@ -237,6 +238,7 @@ void SaveDictionaryFile(const std::string& path, const dict::Dictionary& d) {
     h5::WriteStrings(gi, "take", take, where, obj("take"));
     h5::WriteStrings(gi, "from_code", from_code, where, obj("from_code"));
     h5::WriteStrings(gi, "to_code", to_code, where, obj("to_code"));
+    h5::WriteStrings(gi, "to_type", to_type, where, obj("to_type"));
     WriteInts(gi, "key_index", key_index, where, obj("key_index"));
     WriteInts(gi, "from_placement", from_placement, where, obj("from_placement"));
     WriteInts(gi, "from_shape", from_shape, where, obj("from_shape"));
@@ -460,6 +462,14 @@ dict::Dictionary LoadDictionaryFile(const std::string& path) {
   std::vector<double> from_lag(n, std::numeric_limits<double>::quiet_NaN()), to_lag = from_lag;
   if (h5::LinkExists(gi, "from_placement_lag_s")) from_lag = ReadVector(gi, "from_placement_lag_s", n, path);
   if (h5::LinkExists(gi, "to_placement_lag_s")) to_lag = ReadVector(gi, "to_placement_lag_s", n, path);
+  // Optional (files before the key types): "" = unknown.
+  std::vector<std::string> to_type(n);
+  if (h5::LinkExists(gi, "to_type")) {
+    to_type = h5::ReadStrings(gi, "to_type", where, "/dikeys/to_type");
+    if (to_type.size() != n) {
+      Fail(path, "/dikeys/to_type has " + std::to_string(to_type.size()) + " values, expected " + std::to_string(n));
+    }
+  }
   std::vector<hsize_t> dims;
   ReadNumbers(gi, "hand_params", 2, &dims, path);
   const hsize_t total = dims[0];
@@ -484,6 +494,14 @@ dict::Dictionary LoadDictionaryFile(const std::string& path) {
     u.first_frame = static_cast<int64_t>(first_frame[i]);
     u.rate_hz = rate_hz[i];
     u.phasing_s = phasing_s[i];
+    if (!to_type[i].empty()) {
+      KeyType t;
+      if (!ParseKeyTypeText(to_type[i], &t)) {
+        Fail(path, "/dikeys/to_type: unit " + std::to_string(i) + " has type '" + to_type[i] +
+                       "' (expected CV, V, C, rest or empty)");
+      }
+      u.to_type = t;
+    }
     u.from_placement_lag_s = from_lag[i];
     u.to_placement_lag_s = to_lag[i];
     const auto o = static_cast<Eigen::Index>(offset[i]), k = static_cast<Eigen::Index>(frames[i]);

@@ -204,6 +204,9 @@ TEST_F(DictJob, HoldsExactlyTheCorpusKeySuccessions) {
     EXPECT_TRUE(u.hand_params.allFinite());
     EXPECT_TRUE(u.forearm_in_head.allFinite());
     EXPECT_TRUE(u.head_pose.allFinite());
+    // The type of the key reached is the simulator's (whose A1 it is).
+    ASSERT_TRUE(u.to_type.has_value()) << u.take << " " << u.index;
+    EXPECT_EQ(*u.to_type, b.key.type) << u.take << " " << u.index;
     if (b.key.Code() == "00") {
       EXPECT_TRUE(std::isnan(u.phasing_s));
     } else {

@@ -37,6 +37,8 @@ dict::Dictionary SmallDictionary() {
     u.phasing_s = i == 2 ? std::numeric_limits<double>::quiet_NaN() : -0.05 * i;
     u.from_placement_lag_s = i == 1 ? std::numeric_limits<double>::quiet_NaN() : 0.01 * (i + 1);
     u.to_placement_lag_s = -0.02 * i;
+    if (i == 0) u.to_type = KeyType::kCV;
+    if (i == 1) u.to_type = KeyType::kVowelAlone;  // unit 2: unknown
     const int n = 2 + i;
     u.hand_params.resize(n, 3);
     u.forearm_in_head.resize(n, 6);
@@ -111,6 +113,7 @@ TEST(DictionaryFile, RoundTrip) {
     else
       EXPECT_EQ(b.from_placement_lag_s, a.from_placement_lag_s);
     EXPECT_EQ(b.to_placement_lag_s, a.to_placement_lag_s);
+    EXPECT_EQ(b.to_type, a.to_type);
     EXPECT_EQ(b.hand_params, a.hand_params);
     EXPECT_EQ(b.forearm_in_head, a.forearm_in_head);
     EXPECT_EQ(b.head_pose, a.head_pose);
@@ -211,7 +214,7 @@ TEST(DictionaryFile, TheDocumentedLayoutReadWithTheHdf5CApiAlone) {
        {"/dikeys/take", "/dikeys/from_code", "/dikeys/to_code", "/dikeys/key_index", "/dikeys/from_placement",
         "/dikeys/from_shape", "/dikeys/to_placement", "/dikeys/to_shape", "/dikeys/first_frame", "/dikeys/offset",
         "/dikeys/frames", "/dikeys/start_s", "/dikeys/end_s", "/dikeys/duration_s", "/dikeys/phasing_s",
-        "/dikeys/rate_hz", "/dikeys/from_placement_lag_s", "/dikeys/to_placement_lag_s"}) {
+        "/dikeys/rate_hz", "/dikeys/from_placement_lag_s", "/dikeys/to_placement_lag_s", "/dikeys/to_type"}) {
     EXPECT_EQ(DatasetShape(f, name), std::vector<hsize_t>{3}) << name;
   }
   // Frames 2 + 3 + 4 = 9 rows, concatenated in unit order.
@@ -248,6 +251,23 @@ TEST(DictionaryFile, TheDocumentedLayoutReadWithTheHdf5CApiAlone) {
   EXPECT_EQ(pc[0 * 6 + 5], 1);  // 0 → 5
   EXPECT_EQ(pc[2 * 6 + 5], 1);  // 2 → 5
   H5Fclose(f);
+}
+
+TEST(DictionaryFile, AFileWithoutKeyTypesReadsWithTypesUnknown) {
+  // Dictionaries written before the key types have no /dikeys/to_type.
+  testing::TempDir dir;
+  const std::string path = (dir / "d.h5").string();
+  SaveDictionaryFile(path, SmallDictionary());
+  ASSERT_TRUE(LoadDictionaryFile(path).dikeys[1].to_type.has_value());
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  ASSERT_GE(H5Ldelete(f, "/dikeys/to_type", H5P_DEFAULT), 0);
+  H5Fclose(f);
+  const dict::Dictionary d = LoadDictionaryFile(path);
+  ASSERT_EQ(d.dikeys.size(), 3u);
+  for (const dict::DikeyUnit& u : d.dikeys) EXPECT_FALSE(u.to_type.has_value());
+  EXPECT_NEAR(d.dikeys[1].phasing_s, -0.05, 1e-15);  // the rest as before
 }
 
 TEST(DictionaryFile, RefusesWhatIsNotADictionary) {

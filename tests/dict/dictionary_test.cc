@@ -142,6 +142,30 @@ TEST(Dikeys, PhasingIsTheTargetMinusTheSyllableOnset) {
   EXPECT_TRUE(std::isnan(u[3].phasing_s));  // to rest
 }
 
+TEST(Dikeys, EachUnitKeepsTheTypeOfTheKeyItReaches) {
+  // Three marks (rests added at 0 and at the end): CV, lone V, lone C.
+  TakeSeries s = Series();
+  s.syllable_onset_s = {0.15, 0.28, 0.60};
+  s.key_type = {KeyType::kCV, KeyType::kVowelAlone, KeyType::kConsonantAlone};
+  const std::vector<DikeyUnit> u = ExtractDikeys(s);
+  ASSERT_EQ(u.size(), 4u);
+  ASSERT_TRUE(u[0].to_type && u[1].to_type && u[2].to_type && u[3].to_type);
+  EXPECT_EQ(*u[0].to_type, KeyType::kCV);
+  EXPECT_EQ(*u[1].to_type, KeyType::kVowelAlone);
+  EXPECT_EQ(*u[2].to_type, KeyType::kConsonantAlone);
+  EXPECT_EQ(*u[3].to_type, KeyType::kRest);  // the added rest
+  // Unknown types: none but the rests'.
+  s.key_type.clear();
+  const std::vector<DikeyUnit> v = ExtractDikeys(s);
+  ASSERT_EQ(v.size(), 4u);
+  EXPECT_FALSE(v[0].to_type.has_value());
+  EXPECT_FALSE(v[2].to_type.has_value());
+  ASSERT_TRUE(v[3].to_type.has_value());
+  EXPECT_EQ(*v[3].to_type, KeyType::kRest);
+  s.key_type = {KeyType::kCV};  // one type for three marks
+  EXPECT_THROW(ExtractDikeys(s), InvalidInput);
+}
+
 TEST(Dikeys, PlacementLagsAreThePlacementTargetsMinusTheShapeTargets) {
   // Marks at 0.10, 0.30, 0.55 (rests added at 0 and at the end): the
   // placements arrive 30 ms after, 20 ms before, unknown.

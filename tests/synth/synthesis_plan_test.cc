@@ -91,6 +91,68 @@ TEST(SynthesisPlan, PerDikeyPhasingUsesTheSuccessionThenTheCodeThenTheGlobalRule
   EXPECT_NEAR(plan.keys[4].target_s, 0.90 + 0.4, 1e-12);
 }
 
+TEST(SynthesisPlan, PerDikeyPhasingPoolsUnitsOfTheKeysOwnTypeOnly) {
+  // "_ m i i _": [m] has shape 5 and [i] placement 3, so "m i" is the CV
+  // key 35 and the second [i] a lone vowel, also 35. Their A1 differ
+  // (consonant onset, vowel onset), so a dictionary whose code-35 units are
+  // of both types must not mix their phasing.
+  const std::vector<Phone> phones = {P("", 0.0, 0.5), P("m", 0.5, 0.6), P("i", 0.6, 0.8), P("i", 0.8, 1.0),
+                                     P("", 1.0, 1.2)};
+  const std::vector<Key> keys = CueKeys(phones);
+  ASSERT_EQ(keys.size(), 4u);  // rest, CV 35, V 35, rest
+  ASSERT_EQ(keys[1].type, KeyType::kCV);
+  ASSERT_EQ(keys[2].type, KeyType::kVowelAlone);
+  ASSERT_EQ(keys[1].Code(), "35");
+  ASSERT_EQ(keys[2].Code(), "35");
+  const KeyCode k35{3, 5};
+  PlanOptions o;
+  o.shrinkage_units = 0;
+  o.min_slot_fraction = 0;
+  o.rule = PhasingRule::kPerDikey;
+  auto typed = [](DikeyUnit u, KeyType t) {
+    u.to_type = t;
+    return u;
+  };
+  {
+    // Rest → 35: a CV unit at -0.02 s, a lone-V unit at +0.09 s; 35 → 35: a
+    // lone-V unit at +0.07 s and a CV unit at +0.01 s.
+    Dictionary d;
+    d.dikeys.push_back(typed(Unit(KeyCode{}, k35, 0.3, -0.02), KeyType::kCV));
+    d.dikeys.push_back(typed(Unit(KeyCode{}, k35, 0.3, 0.09), KeyType::kVowelAlone));
+    d.dikeys.push_back(typed(Unit(k35, k35, 0.3, 0.07), KeyType::kVowelAlone));
+    d.dikeys.push_back(typed(Unit(k35, k35, 0.3, 0.01), KeyType::kCV));
+    const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
+    EXPECT_NEAR(plan.keys[1].target_s - plan.keys[1].a1_s, -0.02, 1e-12);  // the CV unit alone
+    EXPECT_EQ(plan.keys[1].source, "dikey");
+    EXPECT_NEAR(plan.keys[2].target_s - plan.keys[2].a1_s, 0.07, 1e-12);  // the lone-V 35 → 35 unit alone
+    EXPECT_EQ(plan.keys[2].source, "dikey");
+  }
+  {
+    // No lone-V unit reaches 35, but lone vowels reach other codes (+0.10,
+    // +0.06): the lone vowel takes their mean, not the CV units' phasing.
+    Dictionary d;
+    d.dikeys.push_back(typed(Unit(KeyCode{}, k35, 0.3, -0.02), KeyType::kCV));
+    d.dikeys.push_back(typed(Unit(k35, k35, 0.3, 0.01), KeyType::kCV));
+    d.dikeys.push_back(typed(Unit(KeyCode{}, KeyCode{1, 5}, 0.3, 0.10), KeyType::kVowelAlone));
+    d.dikeys.push_back(typed(Unit(KeyCode{}, KeyCode{4, 5}, 0.3, 0.06), KeyType::kVowelAlone));
+    const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
+    EXPECT_NEAR(plan.keys[2].target_s - plan.keys[2].a1_s, 0.08, 1e-12);
+    EXPECT_EQ(plan.keys[2].source, "type");
+  }
+  {
+    // A dictionary without types (files before them): units pool by code, as before.
+    Dictionary d;
+    d.dikeys.push_back(Unit(KeyCode{}, k35, 0.3, -0.02));
+    d.dikeys.push_back(Unit(KeyCode{}, k35, 0.3, 0.06));
+    d.dikeys.push_back(Unit(k35, k35, 0.3, 0.04));
+    const SynthesisPlan plan = PlanKeys(keys, phones, 1.2, d, o);
+    EXPECT_NEAR(plan.keys[1].target_s - plan.keys[1].a1_s, 0.02, 1e-12);  // mean of -0.02 and 0.06
+    EXPECT_EQ(plan.keys[1].source, "dikey");
+    EXPECT_NEAR(plan.keys[2].target_s - plan.keys[2].a1_s, 0.04, 1e-12);
+    EXPECT_EQ(plan.keys[2].source, "dikey");
+  }
+}
+
 TEST(SynthesisPlan, LeadInWhenTheFirstMovementWouldStartBeforeTimeZero) {
   std::vector<Phone> phones = {P("p", 0.0, 0.1), P("a", 0.1, 0.3), P("", 0.3, 0.5)};
   const std::vector<Key> keys = CueKeys(phones);

@@ -122,8 +122,16 @@ std::vector<double> PlacementTargets(const Take& take, const std::vector<KeyMark
 
 // The syllable onset of every mark when the phone tier's cued keys (rests
 // left out) have the marks' codes in order; empty otherwise.
-std::vector<double> SyllableOnsets(const Take& take, const std::vector<KeyMark>& marks, const std::string& phones,
-                                   const std::string& where) {
+// Each mark's syllable onset (A1) and key type, from the LfPC keys of the
+// phone tier; both empty when the tier is absent or its keys are not the
+// marks' codes in order.
+struct Syllables {
+  std::vector<double> onset_s;
+  std::vector<KeyType> type;
+};
+
+Syllables SyllablesOfMarks(const Take& take, const std::vector<KeyMark>& marks, const std::string& phones,
+                           const std::string& where) {
   if (phones.empty()) return {};
   const LabelTier* tier = FindTier(take.tiers, phones);
   if (!tier || tier->kind != LabelTier::Kind::kInterval) return {};
@@ -131,7 +139,9 @@ std::vector<double> SyllableOnsets(const Take& take, const std::vector<KeyMark>&
   std::vector<const Key*> keys;
   for (const Key& k : cued.keys)
     if (!(k.placement == 0 && k.shape == 0)) keys.push_back(&k);
-  std::vector<double> onsets(marks.size(), std::numeric_limits<double>::quiet_NaN());
+  Syllables out;
+  out.onset_s.assign(marks.size(), std::numeric_limits<double>::quiet_NaN());
+  out.type.assign(marks.size(), KeyType::kRest);
   size_t next = 0;
   for (size_t i = 0; i < marks.size(); ++i) {
     if (marks[i].code.IsRest()) continue;
@@ -139,10 +149,11 @@ std::vector<double> SyllableOnsets(const Take& take, const std::vector<KeyMark>&
         keys[next]->shape != marks[i].code.shape) {
       return {};
     }
-    onsets[i] = keys[next++]->a1_s;
+    out.type[i] = keys[next]->type;
+    out.onset_s[i] = keys[next++]->a1_s;
   }
   if (next != keys.size()) return {};
-  return onsets;
+  return out;
 }
 
 json Pairs(const std::vector<std::pair<int, int>>& pairs) {
@@ -221,7 +232,7 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
         Extract(take.markers, BindNames(hand_set, take.marker_names, hand_names, where), range.first, range.count);
     // Marks within the range, on the range's clock.
     const std::vector<KeyMark> all = ReadKeyTier(*tier, where);
-    const std::vector<double> onsets = SyllableOnsets(take, all, options.phones, where);
+    const Syllables syllables = SyllablesOfMarks(take, all, options.phones, where);
     const std::vector<double> placements = PlacementTargets(take, all, options.placement_tier, where);
     const double offset = static_cast<double>(range.first) / take.rate_hz;
     const double last = static_cast<double>(range.first + range.count - 1) / take.rate_hz;
@@ -230,11 +241,14 @@ json DictBuild(const DictBuildOptions& options, Progress& progress) {
     for (size_t k = 0; k < all.size(); ++k) {
       if (all[k].time_s < offset || all[k].time_s > last) continue;
       w->series.keys.push_back({all[k].time_s - offset, all[k].code});
-      if (!onsets.empty()) w->series.syllable_onset_s.push_back(onsets[k] - offset);
+      if (!syllables.onset_s.empty()) {
+        w->series.syllable_onset_s.push_back(syllables.onset_s[k] - offset);
+        w->series.key_type.push_back(syllables.type[k]);
+      }
       w->series.placement_target_s.push_back(placements[k] - offset);
       if (std::isfinite(placements[k])) ++w->placement_lags;
     }
-    w->phasing = !onsets.empty();
+    w->phasing = !syllables.onset_s.empty();
     w->series.phones = RangePhones(take, options.phones, offset, last, where);
     w->series.audio_path = take.audio_path;
     work.push_back(std::move(w));
