@@ -270,6 +270,37 @@ TEST(DictionaryFile, AFileWithoutKeyTypesReadsWithTypesUnknown) {
   EXPECT_NEAR(d.dikeys[1].phasing_s, -0.05, 1e-15);  // the rest as before
 }
 
+TEST(DictionaryFile, AnUnknownKeyTypeIsOneClearError) {
+  testing::TempDir dir;
+  const std::string path = (dir / "d.h5").string();
+  SaveDictionaryFile(path, SmallDictionary());
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  ASSERT_GE(H5Ldelete(f, "/dikeys/to_type", H5P_DEFAULT), 0);
+  const hid_t t = H5Tcopy(H5T_C_S1);
+  H5Tset_size(t, H5T_VARIABLE);
+  const hsize_t n = 3;
+  const hid_t space = H5Screate_simple(1, &n, nullptr);
+  const hid_t ds = H5Dcreate2(f, "/dikeys/to_type", t, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  ASSERT_GE(ds, 0);
+  const char* values[3] = {"CV", "VC", ""};
+  ASSERT_GE(H5Dwrite(ds, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, values), 0);
+  H5Dclose(ds);
+  H5Sclose(space);
+  H5Tclose(t);
+  H5Fclose(f);
+  try {
+    LoadDictionaryFile(path);
+    FAIL();
+  } catch (const ParseError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    EXPECT_NE(what.find("/dikeys/to_type: unit 1 has type 'VC' (expected CV, V, C, rest or empty)"), std::string::npos)
+        << what;
+  }
+}
+
 TEST(DictionaryFile, RefusesWhatIsNotADictionary) {
   testing::TempDir dir;
   const std::string text = (dir / "x.h5").string();
