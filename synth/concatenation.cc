@@ -213,24 +213,121 @@ Eigen::RowVectorXd DikeyRow(const DikeyUnit& u, double row) {
   return v;
 }
 
-// The fraction of a unit's rows trimmed from its start so that it is
-// compressed at most max_compression times onto a slot of slot_s seconds.
-double TrimFraction(const DikeyUnit& u, double slot_s, double max_compression) {
-  const double d = u.duration_s();
-  if (max_compression <= 0 || !(d > max_compression * slot_s)) return 0.0;
-  return 1.0 - max_compression * slot_s / d;
+// How a slot's fraction u in [0, 1] maps onto one stream of its unit (unit
+// fractions: row / (frames − 1)): piecewise linear through knots (slot,
+// unit), both increasing; two knots at one slot fraction are a cut (the
+// unit's rows between them are skipped: a stretch of hold). The unit's rows
+// before the first knot's are trimmed away.
+struct StreamWarp {
+  std::vector<std::pair<double, double>> knots = {{0.0, 0.0}, {1.0, 1.0}};
+  double UnitFraction(double u) const {
+    if (u <= knots.front().first) return knots.front().second;
+    for (size_t k = 1; k < knots.size(); ++k) {
+      const auto& [s0, f0] = knots[k - 1];
+      const auto& [s1, f1] = knots[k];
+      if (u < s1) return s1 > s0 ? f0 + (u - s0) / (s1 - s0) * (f1 - f0) : f1;
+    }
+    return knots.back().second;
+  }
+  // The inverse (clamped to [0, 1]): where a unit fraction lands in the slot.
+  double SlotFraction(double f) const {
+    if (f <= knots.front().second) return 0.0;
+    for (size_t k = 1; k < knots.size(); ++k) {
+      const auto& [s0, f0] = knots[k - 1];
+      const auto& [s1, f1] = knots[k];
+      if (f < f1) return f1 > f0 ? std::max(s0, s0 + (f - f0) / (f1 - f0) * (s1 - s0)) : s0;
+    }
+    return 1.0;
+  }
+  bool trimmed() const { return knots.front().second > 1e-12; }
+};
+
+// The unit's last `shown` seconds of `unit_s`, warped linearly onto the slot.
+StreamWarp LastPart(double unit_s, double shown) {
+  StreamWarp w;
+  w.knots = {{0.0, std::clamp((unit_s - shown) / unit_s, 0.0, 1.0)}, {1.0, 1.0}};
+  return w;
 }
 
-// Row of a unit at u in [0, 1] of its slot, `skip` of its rows trimmed.
-double UnitRowAt(const DikeyUnit& unit, double skip, double u) {
-  return (skip + u * (1.0 - skip)) * static_cast<double>(unit.frames() - 1);
+// The fraction of a unit's rows trimmed from its start so that it is
+// compressed at most max_compression times onto a slot of slot_s seconds.
+double TrimFraction(double unit_s, double slot_s, double max_compression) {
+  if (max_compression <= 0 || !(unit_s > max_compression * slot_s)) return 0.0;
+  return 1.0 - max_compression * slot_s / unit_s;
+}
+
+// ConcatOptions::keep_movement_duration. A stream of a unit of unit_s
+// seconds arrives at its leaving key until arrival_s (0: it starts there),
+// holds it until onset_s and then moves to the arriving key (onset_s =
+// unit_s: it only holds).
+StreamWarp MakeWarp(double unit_s, double slot_s, double arrival_s, double onset_s, const ConcatOptions& o) {
+  if (!(unit_s > 0) || !(slot_s > 0)) return StreamWarp{};
+  if (!o.keep_movement_duration)
+    return LastPart(unit_s, (1.0 - TrimFraction(unit_s, slot_s, o.max_compression)) * unit_s);
+  const double cmax = o.max_compression > 0 ? o.max_compression : std::numeric_limits<double>::infinity();
+  const double m = std::clamp(onset_s, 0.0, unit_s), l = std::clamp(arrival_s, 0.0, m);
+  const double arrival = l, hold = m - l, movement = unit_s - m;
+  auto f = [&](double t) { return t / unit_s; };
+  auto s = [&](double t) { return t / slot_s; };
+  StreamWarp w;
+  if (slot_s >= arrival + movement) {
+    // Arrival and movement at their own speed; the hold fills the rest of
+    // the slot, stretched, or compressed at most cmax times with its middle
+    // cut beyond.
+    const double room = slot_s - arrival - movement;
+    w.knots = {{0.0, 0.0}, {s(arrival), f(l)}};
+    if (hold <= cmax * room) {
+      w.knots.push_back({s(arrival + room), f(m)});
+    } else {
+      const double half = 0.5 * cmax * room;
+      w.knots.push_back({s(arrival + 0.5 * room), f(l + half)});
+      w.knots.push_back({s(arrival + 0.5 * room), f(m - half)});
+      w.knots.push_back({s(arrival + room), f(m)});
+    }
+    w.knots.push_back({1.0, 1.0});
+    return w;
+  }
+  // Too short: the hold is cut and arrival and movement compressed together,
+  // at most cmax times (the start trimmed beyond).
+  const double shown = std::min(arrival + movement, cmax * slot_s);
+  if (shown <= movement) return LastPart(unit_s, shown);
+  const double c = shown / slot_s, kept_arrival = shown - movement;
+  w.knots = {{0.0, f(l - kept_arrival)}, {s(kept_arrival / c), f(l)}, {s(kept_arrival / c), f(m)}, {1.0, 1.0}};
+  return w;
+}
+
+// When a stream's movement starts in a unit (s after its first row): the
+// last frame before the stream's fastest after `from_s` where its speed (the
+// RMS change of its columns per frame, each in units of `inv_sigma`⁻¹,
+// averaged over 5 frames) is at most a tenth of that peak speed; from_s
+// when no frame between is that slow.
+double MovementOnset(const Eigen::MatrixXd& x, const Eigen::VectorXd& inv_sigma, double rate_hz, double from_s) {
+  const Eigen::Index n = x.rows();
+  if (n < 3 || !(rate_hz > 0)) return 0.0;
+  Eigen::VectorXd speed(n - 1);
+  for (Eigen::Index r = 0; r + 1 < n; ++r)
+    speed(r) = ((x.row(r + 1) - x.row(r)).transpose().array() * inv_sigma.array()).matrix().norm();
+  Eigen::VectorXd smooth(n - 1);
+  for (Eigen::Index r = 0; r + 1 < n; ++r) {
+    const Eigen::Index lo = std::max<Eigen::Index>(0, r - 2), hi = std::min<Eigen::Index>(n - 2, r + 2);
+    smooth(r) = speed.segment(lo, hi - lo + 1).mean();
+  }
+  const Eigen::Index first = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::ceil(from_s * rate_hz)), 0, n - 2);
+  Eigen::Index peak = 0;
+  smooth.tail(n - 1 - first).maxCoeff(&peak);
+  peak += first;
+  const double limit = 0.1 * smooth(peak);
+  for (Eigen::Index r = peak; r >= first; --r)
+    if (smooth(r) <= limit) return static_cast<double>(r) / rate_hz;
+  return static_cast<double>(first) / rate_hz;
 }
 
 struct DikeyCandidate {
   FallbackLevel level = FallbackLevel::kWhole;
   int shape_unit = -1, pose_unit = -1;  // the same unit for levels 0 and 1
-  // Fraction of each unit's rows trimmed from its start (ConcatOptions::max_compression).
-  double shape_skip = 0, pose_skip = 0;
+  // Each stream's warp onto the slot (ConcatOptions::max_compression,
+  // keep_movement_duration).
+  StreamWarp shape_warp, pose_warp;
   // With ConcatOptions::trim_keeps_key_posture: the untrimmed first row minus
   // the trimmed one, added as (1 − u) · offset over the slot, so the key
   // posture is held at its frame and the trimmed movement catches up.
@@ -461,6 +558,43 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
     return (a.transpose().array() * (to - from).array()).matrix().norm();
   };
 
+  // Each unit's movement onsets, per stream (ConcatOptions::keep_movement_duration):
+  // a stream whose key component does not change holds all along.
+  // The pose stream first arrives at the leaving key's placement (DikeyUnit::from_placement_lag_s).
+  std::vector<double> shape_onset(d.dikeys.size()), pose_onset(d.dikeys.size()), pose_arrival(d.dikeys.size());
+  if (o.keep_movement_duration) {
+    const Eigen::VectorXd inv = ColumnSigma(spread, rows, P + 6).cwiseInverse();
+    for (size_t j = 0; j < d.dikeys.size(); ++j) {
+      const DikeyUnit& u = d.dikeys[j];
+      const double lag = u.from_placement_lag_s;
+      pose_arrival[j] = std::isfinite(lag) && lag > 0 ? std::min(lag, u.duration_s()) : 0.0;
+      shape_onset[j] =
+          u.from.shape == u.to.shape ? u.duration_s() : MovementOnset(u.hand_params, inv.head(P), u.rate_hz, 0.0);
+      pose_onset[j] = u.from.placement == u.to.placement
+                          ? u.duration_s()
+                          : MovementOnset(u.forearm_in_head, inv.tail(6), u.rate_hz, pose_arrival[j]);
+    }
+  }
+  auto shape_warp = [&](int j, double slot_s) {
+    const DikeyUnit& u = d.dikeys[static_cast<size_t>(j)];
+    return MakeWarp(u.duration_s(), slot_s, 0.0, shape_onset[static_cast<size_t>(j)], o);
+  };
+  auto pose_warp = [&](int j, double slot_s) {
+    const DikeyUnit& u = d.dikeys[static_cast<size_t>(j)];
+    return MakeWarp(u.duration_s(), slot_s, pose_arrival[static_cast<size_t>(j)], pose_onset[static_cast<size_t>(j)],
+                    o);
+  };
+  // A candidate's two streams at slot fraction u, each through its warp.
+  auto unit_row = [](const DikeyUnit& u, const StreamWarp& w, double f) {
+    return w.UnitFraction(f) * static_cast<double>(u.frames() - 1);
+  };
+  auto streams_at = [&](int s, const StreamWarp& ws, int p, const StreamWarp& wp, double f) {
+    const DikeyUnit &us = d.dikeys[static_cast<size_t>(s)], &up = d.dikeys[static_cast<size_t>(p)];
+    Eigen::RowVectorXd v = DikeyRow(us, unit_row(us, ws, f));
+    v.tail(12) = DikeyRow(up, unit_row(up, wp, f)).tail(12);
+    return v;
+  };
+
   KeyClasses classes;
   classes.keep_postures = o.posture_radius > 0;
   for (const DikeyUnit& u : d.dikeys) {
@@ -484,11 +618,12 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
         DikeyCandidate c;
         c.level = level;
         c.shape_unit = c.pose_unit = j;
-        c.shape_skip = c.pose_skip = TrimFraction(u, target, o.max_compression);
+        c.shape_warp = shape_warp(j, target);
+        c.pose_warp = pose_warp(j, target);
         c.used_to = to;
         c.selection = std::abs(mismatch[static_cast<size_t>(j)]);
-        c.first = DikeyRow(u, UnitRowAt(u, c.shape_skip, 0));
-        if (o.trim_keeps_key_posture && c.shape_skip > 0) {
+        c.first = streams_at(j, c.shape_warp, j, c.pose_warp, 0);
+        if (o.trim_keeps_key_posture && (c.shape_warp.trimmed() || c.pose_warp.trimmed())) {
           const Eigen::RowVectorXd untrimmed = DikeyRow(u, 0.0);
           c.key_offset = untrimmed - c.first;
           c.first = untrimmed;
@@ -541,11 +676,10 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
           c.used_to = k1;
           const double ms = mismatch[static_cast<size_t>(s)], mp = mismatch[static_cast<size_t>(p)];
           c.selection = std::sqrt(0.5 * (ms * ms + mp * mp));
-          c.shape_skip = TrimFraction(us, target, o.max_compression);
-          c.pose_skip = TrimFraction(up, target, o.max_compression);
-          c.first = DikeyRow(us, UnitRowAt(us, c.shape_skip, 0));
-          c.first.tail(12) = DikeyRow(up, UnitRowAt(up, c.pose_skip, 0)).tail(12);
-          if (o.trim_keeps_key_posture && (c.shape_skip > 0 || c.pose_skip > 0)) {
+          c.shape_warp = shape_warp(s, target);
+          c.pose_warp = pose_warp(p, target);
+          c.first = streams_at(s, c.shape_warp, p, c.pose_warp, 0);
+          if (o.trim_keeps_key_posture && (c.shape_warp.trimmed() || c.pose_warp.trimmed())) {
             Eigen::RowVectorXd untrimmed = DikeyRow(us, 0.0);
             untrimmed.tail(12) = DikeyRow(up, 0.0).tail(12);
             c.key_offset = untrimmed - c.first;
@@ -639,12 +773,7 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
   auto sample = [&](size_t i, double u) -> Eigen::RowVectorXd {
     const DikeyCandidate& c = chosen(i);
     if (c.level == FallbackLevel::kInterpolated) return c.first + MinimumJerk(u) * (c.last - c.first);
-    const DikeyUnit& us = d.dikeys[static_cast<size_t>(c.shape_unit)];
-    Eigen::RowVectorXd v = DikeyRow(us, UnitRowAt(us, c.shape_skip, u));
-    if (c.pose_unit != c.shape_unit) {
-      const DikeyUnit& up = d.dikeys[static_cast<size_t>(c.pose_unit)];
-      v.tail(12) = DikeyRow(up, UnitRowAt(up, c.pose_skip, u)).tail(12);
-    }
+    Eigen::RowVectorXd v = streams_at(c.shape_unit, c.shape_warp, c.pose_unit, c.pose_warp, u);
     if (c.key_offset.size()) v += (1.0 - u) * c.key_offset;
     return v;
   };
@@ -674,8 +803,8 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
       if (std::isfinite(lag) && lag < 0) {
         r.leaving_placement_lag_s = lag;
       } else if (std::isfinite(lag) && dur > 0) {
-        // Unit fraction → slot fraction (rows before skip trimmed away).
-        const double skip = c.pose_skip, u = std::clamp((lag / dur - skip) / (1.0 - skip), 0.0, 1.0);
+        // Unit fraction → slot fraction (0 when trimmed away).
+        const double u = c.pose_warp.SlotFraction(lag / dur);
         r.leaving_placement_lag_s = u * (keys[i + 1].target_s - keys[i].target_s);
       }
     }

@@ -317,6 +317,17 @@ TEST_F(SayJob, SynthesisesACorpusSentenceFromWholeDikeys) {
   EXPECT_NEAR(frames, wav.duration_s() * 25.0, 1.0);
   EXPECT_TRUE(fs::exists(out / "synthesis.h5"));
   EXPECT_TRUE(fs::exists(out / "say.json"));
+  EXPECT_EQ(r["dikey_warp"], "linear");
+
+  // --keep-movement-durations: the same keys reached, the warp named.
+  o.keep_movement_durations = true;
+  o.video = false;
+  o.output = (fx.dir / "say-kept").string();
+  const json kept = Say(o, progress);
+  EXPECT_EQ(kept["dikey_warp"], "movements kept");
+  EXPECT_GE(kept["check"]["keys"]["accuracy"].get<double>(), 0.9) << kept["check"].dump();
+  EXPECT_LE(kept["check"]["continuity"]["max_jump_mm"].get<double>(),
+            kept["sentences"][0]["speed_limit"]["limit_mm"].get<double>() + 1e-6);
 }
 
 TEST_F(SayJob, FragmentsTakeACorpusSentencesFaceFromItsOwnTake) {

@@ -8,6 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -200,6 +201,108 @@ TEST(ConcatenateDikeys, AUnitMuchLongerThanItsSlotIsTrimmedNotCompressed) {
   o.max_compression = 0.5;
   EXPECT_THAT([&] { ConcatenateDikeys(d, keys, 1.3, o); },
               ::testing::ThrowsMessage<InvalidInput>(HasSubstr("max_compression must be 0 or >= 1")));
+}
+
+// A 12 → 35 dikey of 0.6 s (61 rows) that holds, then moves at constant
+// speed: the hand parameters hold shape 2 for rows 0-30 and ramp to shape 5
+// over rows 30-60; the forearm and head hold placement 1 for rows 0-40 and
+// ramp to placement 3 over rows 40-60.
+DikeyUnit HoldThenMove() {
+  DikeyUnit u = Dikey("12", "35", 0.6);
+  for (Eigen::Index r = 0; r < u.frames(); ++r) {
+    const double s = std::clamp((static_cast<double>(r) - 30.0) / 30.0, 0.0, 1.0);
+    const double p = std::clamp((static_cast<double>(r) - 40.0) / 20.0, 0.0, 1.0);
+    u.hand_params.row(r) = (1 - s) * ShapeValue(2) + s * ShapeValue(5);
+    u.forearm_in_head.row(r) = (1 - p) * ForearmValue(1) + p * ForearmValue(3);
+    u.head_pose.row(r) = (1 - p) * HeadValue(1) + p * HeadValue(3);
+  }
+  return u;
+}
+
+TEST(ConcatenateDikeys, KeptMovementDurationsFitTheSlotWithTheHoldBeforeThem) {
+  // The hold-then-move unit on a 0.4 s slot (frames 50-90). Its movements'
+  // onsets by the documented rule (the last frame whose 5-frame mean speed
+  // is at most a tenth of the peak): shape row 27 (rows 25-29 still), pose
+  // row 37. Kept durations: the shape's last 0.33 s end at frame 90 at their
+  // own speed, so the ramp starts at frame 60 (unit row 30) and moves 1/30
+  // of the way per frame; the pose ramp starts at frame 70 (unit row 40).
+  // The linear warp instead trims the unit's first 0.1 s and compresses the
+  // rest 1.25 times: the shape ramp starts at frame 66, 1.25 times faster.
+  const Dictionary d = DikeyDictionary({Dikey("00", "12", 0.5), HoldThenMove(), Dikey("35", "00", 0.4)});
+  const auto keys = Keys({{"00", 0.0}, {"12", 0.5}, {"35", 0.9}, {"00", 1.3}});
+  ConcatOptions o;
+  o.max_compression = 1.25;
+  o.keep_movement_duration = true;
+  const HandTrack kept = ConcatenateDikeys(d, keys, 1.3, o);
+  auto shape_at = [](double a) { return ((1 - a) * ShapeValue(2) + a * ShapeValue(5)).eval(); };
+  auto pose_at = [](double a) { return ((1 - a) * ForearmValue(1) + a * ForearmValue(3)).eval(); };
+  for (Eigen::Index f = 50; f <= 60; ++f) EXPECT_LT(MaxAbsDiff(kept.hand_params.row(f), ShapeValue(2)), kTol) << f;
+  for (Eigen::Index f = 60; f <= 90; ++f)
+    EXPECT_LT(MaxAbsDiff(kept.hand_params.row(f), shape_at(static_cast<double>(f - 60) / 30.0)), kTol) << f;
+  for (Eigen::Index f = 50; f <= 70; ++f) EXPECT_LT(MaxAbsDiff(kept.forearm_in_head.row(f), ForearmValue(1)), kTol);
+  EXPECT_LT(MaxAbsDiff(kept.forearm_in_head.row(80), pose_at(0.5)), kTol);
+  EXPECT_LT(MaxAbsDiff(kept.forearm_in_head.row(90), ForearmValue(3)), kTol);
+  o.keep_movement_duration = false;
+  const HandTrack linear = ConcatenateDikeys(d, keys, 1.3, o);
+  EXPECT_LT(MaxAbsDiff(linear.hand_params.row(66), ShapeValue(2)), kTol);
+  EXPECT_LT(MaxAbsDiff(linear.hand_params.row(78), shape_at(0.5)), kTol);
+  EXPECT_LT(MaxAbsDiff(linear.hand_params.row(62), ShapeValue(2)), kTol);
+
+  // A 1.0 s slot (frames 50-150): the hold is stretched, the movements keep
+  // their speed and end at frame 150 (shape ramp from frame 120, pose from
+  // 130); the linear warp would start the shape ramp at frame 100.
+  const auto slow = Keys({{"00", 0.0}, {"12", 0.5}, {"35", 1.5}, {"00", 1.9}});
+  o.keep_movement_duration = true;
+  const HandTrack stretched = ConcatenateDikeys(d, slow, 1.9, o);
+  EXPECT_LT(MaxAbsDiff(stretched.hand_params.row(120), ShapeValue(2)), kTol);
+  EXPECT_LT(MaxAbsDiff(stretched.hand_params.row(135), shape_at(0.5)), kTol);
+  EXPECT_LT(MaxAbsDiff(stretched.forearm_in_head.row(130), ForearmValue(1)), kTol);
+  EXPECT_LT(MaxAbsDiff(stretched.forearm_in_head.row(140), pose_at(0.5)), kTol);
+
+  // A 0.2 s slot (frames 50-70), shorter than the shape's 0.33 s movement:
+  // the hold is dropped and the movement compressed at most 1.25 times, so
+  // the slot shows the unit's last 0.25 s (from row 35, 1/6 of the ramp):
+  // the smoothing carries that step back over the previous slot, and the
+  // ramp then runs 1.25 times its own speed.
+  const auto fast = Keys({{"00", 0.0}, {"12", 0.5}, {"35", 0.7}, {"00", 1.1}});
+  const HandTrack squeezed = ConcatenateDikeys(d, fast, 1.1, o);
+  EXPECT_LT(MaxAbsDiff(squeezed.hand_params.row(50), shape_at(1.0 / 6.0)), kTol);
+  EXPECT_LT(MaxAbsDiff(squeezed.hand_params.row(62), shape_at(1.0 / 6.0 + 12.0 * 1.25 / 30.0)), kTol);
+  EXPECT_LT(MaxAbsDiff(squeezed.hand_params.row(70), ShapeValue(5)), kTol);
+}
+
+TEST(ConcatenateDikeys, KeptMovementDurationsKeepThePlacementsArrivalToo) {
+  // The hold-then-move unit whose pose stream is still arriving at
+  // placement 1 for its first 0.1 s (from_placement_lag_s; rows 0-10 ramp
+  // from 5 mm beside it). On the 0.4 s slot the arrival keeps its speed
+  // (frames 50-60), so does the movement (from frame 70); the hold between
+  // is cut. The linear warp trims the unit's first 0.1 s, the arrival with
+  // them: the slot starts on placement 1.
+  DikeyUnit u = HoldThenMove();
+  Eigen::RowVectorXd beside = Eigen::RowVectorXd::Zero(6);
+  beside(3) = 5.0;
+  for (Eigen::Index r = 0; r <= 10; ++r)
+    u.forearm_in_head.row(r) = ForearmValue(1) + (1.0 - static_cast<double>(r) / 10.0) * beside;
+  u.from_placement_lag_s = 0.1;
+  const Dictionary d = DikeyDictionary({Dikey("00", "12", 0.5), u, Dikey("35", "00", 0.4)});
+  const auto keys = Keys({{"00", 0.0}, {"12", 0.5}, {"35", 0.9}, {"00", 1.3}});
+  ConcatOptions o;
+  o.max_compression = 1.25;
+  o.keep_movement_duration = true;
+  const HandTrack kept = ConcatenateDikeys(d, keys, 1.3, o);
+  EXPECT_LT(MaxAbsDiff(kept.forearm_in_head.row(50), ForearmValue(1) + beside), kTol);
+  EXPECT_LT(MaxAbsDiff(kept.forearm_in_head.row(55), ForearmValue(1) + 0.5 * beside), kTol);
+  for (Eigen::Index f = 60; f <= 70; ++f)
+    EXPECT_LT(MaxAbsDiff(kept.forearm_in_head.row(f), ForearmValue(1)), kTol) << f;
+  EXPECT_LT(MaxAbsDiff(kept.forearm_in_head.row(80), 0.5 * (ForearmValue(1) + ForearmValue(3))), kTol);
+  EXPECT_LT(MaxAbsDiff(kept.forearm_in_head.row(90), ForearmValue(3)), kTol);
+  // The reported lag: the arrival ends 0.1 s into the slot.
+  ASSERT_EQ(kept.keys.size(), 3u);
+  EXPECT_NEAR(kept.keys[1].leaving_placement_lag_s, 0.1, 1e-12);
+  o.keep_movement_duration = false;
+  const HandTrack linear = ConcatenateDikeys(d, keys, 1.3, o);
+  EXPECT_LT(MaxAbsDiff(linear.forearm_in_head.row(50), ForearmValue(1)), kTol);
+  EXPECT_NEAR(linear.keys[1].leaving_placement_lag_s, 0.0, 1e-12);
 }
 
 TEST(ConcatenateDikeys, LeavingPlacementLagFollowsTheSlotsWarpAndTrim) {

@@ -778,6 +778,9 @@ class SayCommand : public Command {
     sub_->add_flag("--keep-key-postures,!--no-keep-key-postures", options_.keep_key_postures,
                    "A dikey trimmed to fit a short slot still starts at its key's posture (default: on; more keys "
                    "reached; docs/synthesis.md)");
+    sub_->add_flag("--keep-movement-durations", options_.keep_movement_durations,
+                   "Each dikey's movements keep their corpus duration and the holds before them fit the slot, "
+                   "instead of warping whole units linearly (default: off; docs/synthesis.md)");
     sub_->add_option("--posture-radius", options_.posture_radius,
                      "Key posture pull: a hand farther than this (in its key code's standard deviations) from the "
                      "code's mean posture is moved toward the code's exemplar (0 = off; docs/synthesis.md)")

@@ -134,6 +134,7 @@ json Say(const SayOptions& options, Progress& progress) {
   so.concat.target_weight = options.target_weight;
   so.concat.trim_keeps_key_posture = options.keep_key_postures;
   so.concat.posture_radius = options.posture_radius;
+  so.concat.keep_movement_duration = options.keep_movement_durations;
   so.face_fragments = options.face_units == "fragments";
   dict::ParseResampling(options.resampling, &so.fragments.resampling);
   so.fragments.blend_fraction = options.blend;
@@ -152,6 +153,7 @@ json Say(const SayOptions& options, Progress& progress) {
                  {"models", options.models},
                  {"output", options.output},
                  {"phasing", options.phasing},
+                 {"dikey_warp", options.keep_movement_durations ? "movements kept" : "linear"},
                  {"corpus", corpus_path},
                  {"sentences", json::array()},
                  {"face_units", options.face_units}};

@@ -27,30 +27,31 @@
 namespace csw::jobs {
 
 struct SayOptions {
-  std::vector<std::string> texts;       // sentences given on the command line
-  std::string text_file;                // one sentence per line (blank lines and lines starting with # skipped)
-  std::string dict;                     // dictionary file (csw dict build)
-  std::string models;                   // the model file the dictionary was built with
-  std::string output;                   // output folder (created)
-  int rate_wpm = 0;                     // espeak-ng rate; 0 = match the corpus's mean phone duration
-  std::string phasing = "dikey";        // "dikey" (stored per-dikey phasing) or "global" (the seed's rule)
-  double rate_hz = 0;                   // output frame rate; 0 = the corpus's
-  double selection_weight = 10;         // per s of RMS duration mismatch (ConcatOptions)
-  double concatenation_weight = 1;      // per standardised RMS jump (ConcatOptions)
-  double target_weight = 10;            // per standardised distance of a key posture from its class (ConcatOptions)
-  bool keep_key_postures = true;        // a trimmed dikey still starts at its key's posture (ConcatOptions)
-  double posture_radius = 0.5;          // key posture pull toward the code's exemplar (ConcatOptions), 0 = off
-  std::string face_units = "diphones";  // "diphones" (Viterbi) or "fragments" (seed-003, synth/fragments.h)
-  std::string resampling = "rbf";       // fragments: "rbf" (inverse multiquadric) or "linear"
-  double rbf_shape = 2;                 // fragments: inverse-multiquadric shape, in smallest sample spacings
-  double blend = 0.5;                   // fragments: overlap at a join, fraction of the shared phone
-  bool align_phones = true;             // fragments: warp through every phone boundary
-  bool video = true;                    // write pointlight.mp4
-  double fps = 25;                      // video frame rate
-  bool check = false;                   // close the loop (needs keys)
-  std::string keys;                     // key model file (csw keys train)
-  std::string corpus_phasing;           // JSON of csw phasing on the corpus ("" = timing without the corpus's)
-  std::string Check() const;            // "" or the reason
+  std::vector<std::string> texts;        // sentences given on the command line
+  std::string text_file;                 // one sentence per line (blank lines and lines starting with # skipped)
+  std::string dict;                      // dictionary file (csw dict build)
+  std::string models;                    // the model file the dictionary was built with
+  std::string output;                    // output folder (created)
+  int rate_wpm = 0;                      // espeak-ng rate; 0 = match the corpus's mean phone duration
+  std::string phasing = "dikey";         // "dikey" (stored per-dikey phasing) or "global" (the seed's rule)
+  double rate_hz = 0;                    // output frame rate; 0 = the corpus's
+  double selection_weight = 10;          // per s of RMS duration mismatch (ConcatOptions)
+  double concatenation_weight = 1;       // per standardised RMS jump (ConcatOptions)
+  double target_weight = 10;             // per standardised distance of a key posture from its class (ConcatOptions)
+  bool keep_key_postures = true;         // a trimmed dikey still starts at its key's posture (ConcatOptions)
+  double posture_radius = 0.5;           // key posture pull toward the code's exemplar (ConcatOptions), 0 = off
+  bool keep_movement_durations = false;  // each dikey stream's movement keeps its duration (ConcatOptions)
+  std::string face_units = "diphones";   // "diphones" (Viterbi) or "fragments" (seed-003, synth/fragments.h)
+  std::string resampling = "rbf";        // fragments: "rbf" (inverse multiquadric) or "linear"
+  double rbf_shape = 2;                  // fragments: inverse-multiquadric shape, in smallest sample spacings
+  double blend = 0.5;                    // fragments: overlap at a join, fraction of the shared phone
+  bool align_phones = true;              // fragments: warp through every phone boundary
+  bool video = true;                     // write pointlight.mp4
+  double fps = 25;                       // video frame rate
+  bool check = false;                    // close the loop (needs keys)
+  std::string keys;                      // key model file (csw keys train)
+  std::string corpus_phasing;            // JSON of csw phasing on the corpus ("" = timing without the corpus's)
+  std::string Check() const;             // "" or the reason
 };
 
 // {"dict", "models", "output", "rate_wpm", "phasing", "rate_hz",
