@@ -146,7 +146,17 @@ TEST(SayText, RendersTheReport) {
            {{"placement_target_ms", 12.4},
             {"corpus_placement_target_ms", nullptr},
             {"shape_target_ms", -20.0},
-            {"corpus_shape_target_ms", -18.0}}}}}}}};
+            {"corpus_shape_target_ms", -18.0},
+            {"placement_onset_difference_ms", 33.6},
+            {"placement_onset_difference_ci95_ms", 24.5},
+            {"placement_target_difference_ms", nullptr},
+            {"placement_target_difference_ci95_ms", nullptr},
+            {"shape_onset_difference_ms", -2.4},
+            {"shape_onset_difference_ci95_ms", 8.0},
+            {"shape_target_difference_ms", 15.3},
+            {"shape_target_difference_ci95_ms", 6.2},
+            {"placement_count", 45},
+            {"shape_count", 220}}}}}}}};
   EXPECT_EQ(SayText(r),
             "say_001: 2.50 s, 4 keys, 162 wpm -> out\n"
             "  warning: no ffmpeg\n"
@@ -154,7 +164,9 @@ TEST(SayText, RendersTheReport) {
             "corpus of the synthesised takes: out/synthesis.h5\n"
             "recognised keys: 3 of 4 (75.0 %)\n"
             "marker jumps: p99 5.50 mm, max 12.25 mm (corpus: p99 6.00 mm, max 20.00 mm)\n"
-            "CV targets re A1: placement 12 ms (corpus nan), shape -20 ms (corpus -18)\n");
+            "CV targets re A1: placement 12 ms (corpus nan), shape -20 ms (corpus -18)\n"
+            "CV synthesis - corpus: placement onset +34 ± 24, target n/a; shape onset -2 ± 8, target +15 ± 6 ms "
+            "(95 % CI; 45 / 220 keys)\n");
   json g = {{"sentences", json::array()},
             {"fallback", {{"whole", 2}}},
             {"corpus", "o/synthesis.h5"},
@@ -319,11 +331,24 @@ TEST_F(SayJob, SynthesisesACorpusSentenceFromWholeDikeys) {
   EXPECT_TRUE(fs::exists(out / "say.json"));
   EXPECT_EQ(r["dikey_warp"], "linear");
 
-  // --keep-movement-durations: the same keys reached, the warp named.
+  // --keep-movement-durations: the same keys reached, the warp named. With a
+  // corpus phasing file that holds only the CV shape target (mean 40 ms,
+  // 95 % half-width 5 ms): that difference and its half-width, the others
+  // unknown.
   o.keep_movement_durations = true;
   o.video = false;
   o.output = (fx.dir / "say-kept").string();
+  o.corpus_phasing = (fx.dir / "corpus_phasing.json").string();
+  std::ofstream(o.corpus_phasing) << R"({"kinematic": {"CV": {"shape": {"target": {"mean_ms": 40, "ci95_ms": 5}}}}})";
   const json kept = Say(o, progress);
+  const json& cv = kept["check"]["timing"]["CV"];
+  ASSERT_TRUE(cv["shape_target_ms"].is_number() && cv["shape_target_ci95_ms"].is_number()) << cv.dump();
+  EXPECT_EQ(cv["corpus_shape_target_ms"], 40.0);
+  EXPECT_NEAR(cv["shape_target_difference_ms"].get<double>(), cv["shape_target_ms"].get<double>() - 40.0, 1e-9);
+  EXPECT_NEAR(cv["shape_target_difference_ci95_ms"].get<double>(),
+              std::sqrt(std::pow(cv["shape_target_ci95_ms"].get<double>(), 2) + 25.0), 1e-9);
+  EXPECT_TRUE(cv["placement_target_difference_ms"].is_null()) << cv.dump();
+  EXPECT_TRUE(cv["shape_onset_difference_ms"].is_null()) << cv.dump();
   EXPECT_EQ(kept["dikey_warp"], "movements kept");
   EXPECT_GE(kept["check"]["keys"]["accuracy"].get<double>(), 0.9) << kept["check"].dump();
   EXPECT_LE(kept["check"]["continuity"]["max_jump_mm"].get<double>(),

@@ -44,12 +44,13 @@ json LevelCounts(const std::vector<int>& counts) {
   return j;
 }
 
-// The kinematic phasing summary's mean of a component's landmark ("placement"
-// / "shape", "onset" / "target"), NaN when absent.
-double SummaryMean(const json& summary, const std::string& type, const std::string& component,
-                   const std::string& landmark) {
+// A field ("mean_ms", "ci95_ms") of the kinematic phasing summary for a
+// component's landmark ("placement" / "shape", "onset" / "target"), NaN when
+// absent.
+double SummaryValue(const json& summary, const std::string& type, const std::string& component,
+                    const std::string& landmark, const std::string& field) {
   const json* j = &summary;
-  for (const std::string& k : {type, component, landmark, std::string("mean_ms")}) {
+  for (const std::string& k : {type, component, landmark, field}) {
     if (!j->is_object() || !j->contains(k)) return kNaN;
     j = &(*j)[k];
   }
@@ -376,9 +377,20 @@ json Say(const SayOptions& options, Progress& progress) {
         json t = json::object();
         for (const char* component : {"placement", "shape"}) {
           for (const char* landmark : {"onset", "target"}) {
-            const std::string key = std::string(component) + "_" + landmark + "_ms";
-            t[key] = Number(SummaryMean(mine, type, component, landmark));
-            t["corpus_" + key] = Number(SummaryMean(theirs, type, component, landmark));
+            const std::string name = std::string(component) + "_" + landmark;
+            const double mean = SummaryValue(mine, type, component, landmark, "mean_ms");
+            const double corpus_mean = SummaryValue(theirs, type, component, landmark, "mean_ms");
+            const double ci = SummaryValue(mine, type, component, landmark, "ci95_ms");
+            const double corpus_ci = SummaryValue(theirs, type, component, landmark, "ci95_ms");
+            t[name + "_ms"] = Number(mean);
+            t["corpus_" + name + "_ms"] = Number(corpus_mean);
+            t[name + "_ci95_ms"] = Number(ci);
+            t["corpus_" + name + "_ci95_ms"] = Number(corpus_ci);
+            // The difference of the two means and its 95 % half-width (the
+            // two means' independent half-widths combined): whether a
+            // difference is the synthesis's or the few keys measured.
+            t[name + "_difference_ms"] = Number(mean - corpus_mean);
+            t[name + "_difference_ci95_ms"] = Number(std::hypot(ci, corpus_ci));
           }
           t[std::string(component) + "_count"] = SummaryCount(mine, type, component);
         }
@@ -451,6 +463,25 @@ std::string SayText(const json& r) {
                       "%s targets re A1: placement %.0f ms (corpus %.0f), shape %.0f ms (corpus %.0f)\n", type,
                       num(x["placement_target_ms"]), num(x["corpus_placement_target_ms"]), num(x["shape_target_ms"]),
                       num(x["corpus_shape_target_ms"]));
+        s += line;
+        if (!x.contains("placement_onset_difference_ms")) continue;
+        std::string parts;
+        for (const char* component : {"placement", "shape"}) {
+          parts += parts.empty() ? "" : "; ";
+          parts += component;
+          for (const char* landmark : {"onset", "target"}) {
+            const std::string name = std::string(component) + "_" + landmark;
+            const double d = num(x[name + "_difference_ms"]), h = num(x[name + "_difference_ci95_ms"]);
+            if (std::isfinite(d) && std::isfinite(h))
+              std::snprintf(line, sizeof line, " %s %+.0f ± %.0f", landmark, d, h);
+            else
+              std::snprintf(line, sizeof line, " %s n/a", landmark);
+            parts += line;
+            if (std::string(landmark) == "onset") parts += ",";
+          }
+        }
+        std::snprintf(line, sizeof line, "%s synthesis - corpus: %s ms (95 %% CI; %d / %d keys)\n", type, parts.c_str(),
+                      x.value("placement_count", 0), x.value("shape_count", 0));
         s += line;
       }
     }
