@@ -278,6 +278,20 @@ void DictNumbers(std::ostringstream& h, const json& r) {
              Num(r, {"continuity", "p99_jump_mm"}) + " / " + Num(r, {"continuity", "max_jump_mm"})}});
 }
 
+// A CV landmark of csw say --check's timing: "synthesis / corpus", and the
+// difference with its 95 % half-width when both are known.
+std::string Timing(const json& r, const std::string& name) {
+  const json* t = Find(r, {"check", "timing", "CV"});
+  if (!t) return "–";
+  auto num = [&](const std::string& key) {
+    return t->contains(key) && (*t)[key].is_number() ? Fixed((*t)[key].get<double>(), 0) : std::string("–");
+  };
+  std::string s = num(name + "_ms") + " / " + num("corpus_" + name + "_ms");
+  const std::string d = num(name + "_difference_ms"), ci = num(name + "_difference_ci95_ms");
+  if (d != "–" && ci != "–") s += " (difference " + d + " ± " + ci + ", 95 % CI)";
+  return s;
+}
+
 void SayNumbers(std::ostringstream& h, const json& r, const fs::path& base) {
   Table(h, {{"sentences", Size(r, {"sentences"})},
             {"keys recognised (free decoding)", Percent(r, {"check", "keys", "accuracy"})},
@@ -286,12 +300,10 @@ void SayNumbers(std::ostringstream& h, const json& r, const fs::path& base) {
                                                               Num(r, {"check", "continuity", "corpus_p99_jump_mm"})},
             {"marker jumps max, synthesis / corpus (mm)", Num(r, {"check", "continuity", "max_jump_mm"}) + " / " +
                                                               Num(r, {"check", "continuity", "corpus_max_jump_mm"})},
-            {"CV placement target, synthesis / corpus (ms)",
-             Num(r, {"check", "timing", "CV", "placement_target_ms"}, 0) + " / " +
-                 Num(r, {"check", "timing", "CV", "corpus_placement_target_ms"}, 0)},
-            {"CV shape target, synthesis / corpus (ms)",
-             Num(r, {"check", "timing", "CV", "shape_target_ms"}, 0) + " / " +
-                 Num(r, {"check", "timing", "CV", "corpus_shape_target_ms"}, 0)}});
+            {"CV placement target, synthesis / corpus (ms)", Timing(r, "placement_target")},
+            {"CV shape target, synthesis / corpus (ms)", Timing(r, "shape_target")},
+            {"CV placement onset, synthesis / corpus (ms)", Timing(r, "placement_onset")},
+            {"CV shape onset, synthesis / corpus (ms)", Timing(r, "shape_onset")}});
   const json* sentences = Find(r, {"sentences"});
   if (!sentences || !sentences->is_array()) return;
   int n = 0;
