@@ -135,6 +135,7 @@ std::string DecodeOptions::Check() const {
   if (!(switch_penalty >= 0)) return "switch_penalty must be >= 0";
   if (!(aligned_min_key_ms > 0)) return "aligned_min_key_ms must be > 0";
   if (!(floor > 0 && floor < 1)) return "floor must be in (0, 1)";
+  if (!(aligned_floor > 0 && aligned_floor < 1)) return "aligned_floor must be in (0, 1)";
   if (!(plateau_log >= 0)) return "plateau_log must be >= 0";
   if (!(arrival_tolerance >= 0)) return "arrival_tolerance must be >= 0";
   return "";
@@ -239,7 +240,7 @@ std::vector<DecodedKey> DecodeAligned(const KeyPosteriors& posteriors, const std
   for (const auto& x : expected)
     if (x.placement < 0 || x.placement >= kNumPlacements || x.shape < 0 || x.shape >= kNumShapes)
       throw InvalidInput("aligned decoding: expected key " + KeyCode(x.placement, x.shape) + " out of range");
-  const Emissions e = MakeEmissions(posteriors, options.floor);
+  const Emissions e = MakeEmissions(posteriors, options.aligned_floor);
   const int64_t n = posteriors.frames();
   const auto m = static_cast<int64_t>(expected.size());
   if (n < m) throw InvalidInput("aligned decoding: fewer frames than expected keys");

@@ -107,6 +107,42 @@ TEST(DecodeAligned, PlacesTheExpectedSequenceOnThePosteriors) {
   EXPECT_THROW(DecodeAligned(p, {{7, 0}}, 100.0), InvalidInput);
 }
 
+TEST(DecodeAligned, AFewConfidentlyWrongTransitionFramesDoNotPullAKeyOffItsHold) {
+  // Keys 16 36 06 (shape 6 throughout; placements 1, 3, 0) at 100 Hz (shortest
+  // segment 4 frames). Frames 0-20 hold 16; 20-60 hold 36, its placement
+  // posterior ambiguous (3: 0.6, 1: 0.4, as placements 1 and 3 can be); 60-66
+  // a transition where the Gaussians extrapolate: placement 1 at 0.99, 3 and
+  // 0 at 1e-8; 66-90 hold 06.
+  //   right: 36 over its hold, the 6 transition frames on 36 or 06: 6 log f;
+  //   wrong: 16 over 36's hold (40 log(0.4/0.6) = -16.2), 36 squeezed into
+  //   4 transition frames: -16.2 + 4 log f.
+  // With f = 3e-3 (the default): 6 log f = -34.9 > -39.4, right. With the
+  // floor of free decoding, 1e-6: -82.9 < -71.5, wrong.
+  KeyPosteriors p;
+  p.shape = Eigen::MatrixXd::Constant(90, kNumShapes, 0.0);
+  p.shape.col(6).setOnes();
+  p.placement = Eigen::MatrixXd::Constant(90, kNumPlacements, 0.0);
+  p.placement.block(0, 1, 20, 1).setConstant(1.0);
+  p.placement.block(20, 3, 40, 1).setConstant(0.6);
+  p.placement.block(20, 1, 40, 1).setConstant(0.4);
+  p.placement.block(60, 1, 6, 1).setConstant(0.99);
+  p.placement.block(60, 3, 6, 1).setConstant(1e-8);
+  p.placement.block(60, 0, 6, 1).setConstant(1e-8);
+  p.placement.block(66, 0, 24, 1).setConstant(1.0);
+  const std::vector<ExpectedKey> expected = {{1, 6}, {3, 6}, {0, 6}};
+  const auto keys = DecodeAligned(p, expected, 100.0);
+  ASSERT_EQ(keys.size(), 3u);
+  EXPECT_EQ(keys[1].start_frame, 20);
+  EXPECT_GE(keys[1].end_frame, 60);
+  EXPECT_LE(keys[1].end_frame, 66);
+  DecodeOptions strict;
+  strict.aligned_floor = 1e-6;
+  const auto pulled = DecodeAligned(p, expected, 100.0, strict);
+  EXPECT_GE(pulled[1].start_frame, 60);
+  strict.aligned_floor = 0.0;
+  EXPECT_THROW(DecodeAligned(p, expected, 100.0, strict), InvalidInput);
+}
+
 TEST(AlignComponent, OneSegmentPerLabelAndWindowsPullSegmentsToTheirRange) {
   // Shape runs 0 (30 frames), 5 (40), 1 (25), 0 (30): the shape labels align
   // to their runs exactly.
