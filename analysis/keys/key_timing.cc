@@ -136,8 +136,27 @@ void AnchorToSpeech(std::vector<TimedKey>& keys, const std::vector<ExpectedKey>&
       const double at = expected[k].anchor_s + lag.median;
       ComponentTiming& c = timing(k);
       if (c.changes) {
-        if (std::abs(c.target_s - at) <=
-            std::max(options.anchor_outlier_sd * lag.spread, options.anchor_outlier_floor_s))
+        bool nearer_neighbour = false;
+        if (options.anchor_nearest && std::abs(c.target_s - at) > options.anchor_outlier_floor_s) {
+          const double d = std::abs(c.target_s - at);
+          // The nearest keys before and after with a known A1 + lag.
+          auto nearer = [&](size_t j) {
+            const Lag& l = group[expected[j].vowel_anchor ? 1 : 0];
+            return l.known && std::abs(c.target_s - (expected[j].anchor_s + l.median)) < d;
+          };
+          for (size_t j = k; j-- > 0;)
+            if (std::isfinite(expected[j].anchor_s)) {
+              nearer_neighbour = nearer_neighbour || nearer(j);
+              break;
+            }
+          for (size_t j = k + 1; j < n; ++j)
+            if (std::isfinite(expected[j].anchor_s)) {
+              nearer_neighbour = nearer_neighbour || nearer(j);
+              break;
+            }
+        }
+        if (!nearer_neighbour && std::abs(c.target_s - at) <=
+                                     std::max(options.anchor_outlier_sd * lag.spread, options.anchor_outlier_floor_s))
           continue;
         c.target_s = at;
         c.onset_s = kNaN;

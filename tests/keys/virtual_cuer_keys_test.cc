@@ -552,19 +552,24 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
   // 29.6 -> 27.6 ms (reached keys 25.8 -> 22.7, 140/163 within 40 ms; 221/236
   // keys on their own gesture, reached 158/163), clean 27.2 -> 25.8 (reached
   // 22.3), filled 35.2 -> 33.2.
+  // A target more than 80 ms from its own A1 + lag and nearer a neighbouring
+  // key's replaced too (2026-12-05, KeyTimingOptions::anchor_nearest):
+  // model-filled 27.6 -> 27.4 ms (reached keys 22.7 -> 22.0; 224/236 on their
+  // own gesture), clean 25.8 -> 25.8, spline/DCT-filled 33.2 -> 29.2 ms and its
+  // worst key 290 -> 152 ms.
   // The floors below guard those numbers against regressions; the reached
   // keys' mean is held to the 25 ms.
   EXPECT_GE(model.aligned_rate, 0.75);
   EXPECT_GE(static_cast<double>(model.free_reached_matches) / model.free_reached, 0.92);    // 153/163 = 0.939
-  EXPECT_LE(Mean(model.aligned_error_ms), 30.0);                                            // 27.6 ms
-  EXPECT_LE(Mean(model.aligned_error_reached_ms), 25.0);                                    // 22.7 ms
-  EXPECT_LE(Mean(model.aligned_error_ms), Mean(model.unanchored_error_ms) - 3.0);           // 27.6 vs 33.9 ms
+  EXPECT_LE(Mean(model.aligned_error_ms), 29.5);                                            // 27.4 ms
+  EXPECT_LE(Mean(model.aligned_error_reached_ms), 25.0);                                    // 22.0 ms
+  EXPECT_LE(Mean(model.aligned_error_ms), Mean(model.unanchored_error_ms) - 3.0);           // 27.4 vs 33.9 ms
   EXPECT_GE(static_cast<double>(model.aligned_own_reached) / model.aligned_reached, 0.95);  // 158/163 = 0.969
-  EXPECT_GE(static_cast<double>(model.aligned_own) / model.aligned_keys, 0.90);             // 220/236 = 0.932
+  EXPECT_GE(static_cast<double>(model.aligned_own) / model.aligned_keys, 0.92);             // 224/236 = 0.949
   EXPECT_GE(model.speech_timed_repeats, 5);  // the held-out takes' 8 repeated keys
   EXPECT_GE(clean.aligned_rate, 0.78);
   EXPECT_LE(Mean(clean.aligned_error_ms), 28.0);          // 25.8 ms
-  EXPECT_LE(Mean(clean.aligned_error_reached_ms), 25.0);  // 22.3 ms
+  EXPECT_LE(Mean(clean.aligned_error_reached_ms), 25.0);  // 22.1 ms
   EXPECT_GE(filled.aligned_rate, 0.67);
   EXPECT_GE(model.shape_reached.Accuracy(), 0.99);
   EXPECT_GE(model.placement_reached.Accuracy(), 0.97);
@@ -579,7 +584,9 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
   EXPECT_GE(filled.shape.Accuracy(), 0.72);
   EXPECT_GE(filled.placement.Accuracy(), 0.80);
   EXPECT_GE(filled.free_rate, 0.78);
-  EXPECT_LE(Mean(filled.aligned_error_ms), 36.0);  // 33.2 ms (35.2 before the aligned floor)
+  // 29.2 ms (35.2 before the aligned floor, 33.2 before anchor_nearest)
+  EXPECT_LE(Mean(filled.aligned_error_ms), 31.5);
+  EXPECT_LE(*std::max_element(filled.aligned_error_ms.begin(), filled.aligned_error_ms.end()), 200.0);  // 152 ms (290)
 }
 
 // Another lab: the virtual cuer's second layout (other marker names and
@@ -646,14 +653,15 @@ TEST(VirtualCuerKeys, OtherLabLayoutAndShiftedTiming) {
   // With the speech anchors (the lag learnt per take, so the shifted timing
   // needs nothing): clean 106/134 = 0.791, 25.8 ms (was 36.1; reached keys
   // 19.6 ms), filled 34.7 ms (was 41.4). With the aligned floor (2026-12-04):
-  // clean 25.8 ms (reached keys 19.6), filled 32.1 ms (reached 28.9).
+  // clean 25.8 ms (reached keys 19.6), filled 32.1 ms (reached 28.9). With
+  // anchor_nearest (2026-12-05): clean 23.5 ms (reached 16.6), filled 31.7.
   EXPECT_GE(clean.shape_reached.Accuracy(), 0.97);
   EXPECT_GE(clean.placement_reached.Accuracy(), 0.95);
   EXPECT_GE(static_cast<double>(clean.free_reached_matches) / clean.free_reached, 0.90);
   EXPECT_GE(clean.aligned_rate, 0.76);
-  EXPECT_LE(Mean(clean.aligned_error_ms), 29.0);
-  EXPECT_LE(Mean(clean.aligned_error_ms), Mean(clean.unanchored_error_ms) - 5.0);  // 25.8 vs 36.1 ms
-  EXPECT_LE(Mean(filled.aligned_error_ms), 35.0);                                  // 32.1 ms
+  EXPECT_LE(Mean(clean.aligned_error_ms), 26.0);                                   // 23.5 ms
+  EXPECT_LE(Mean(clean.aligned_error_ms), Mean(clean.unanchored_error_ms) - 5.0);  // 23.5 vs 36.1 ms
+  EXPECT_LE(Mean(filled.aligned_error_ms), 34.0);                                  // 31.7 ms
   EXPECT_GE(filled.shape.Accuracy(), 0.62);
   EXPECT_GE(filled.placement.Accuracy(), 0.72);
 }
