@@ -239,7 +239,20 @@ struct StreamWarp {
     }
     return 1.0;
   }
-  bool trimmed() const { return knots.front().second > 1e-12; }
+  // ConcatOptions::movement_onsets (planned): the knots map only the
+  // arrival and hold (unit fractions 0 to movement_from, held there once
+  // reached); the movement, unit fractions movement_from to 1, is laid
+  // linearly from slot fraction movement_start (negative: before the slot)
+  // to 1 and added as a displacement from the row at movement_from.
+  bool planned = false;
+  double movement_from = 1, movement_start = 0;
+  // The movement's unit fraction at slot fraction u (any u; NaN before it
+  // starts or without a planned movement).
+  double MovementFraction(double u) const {
+    if (!planned || u < movement_start) return std::numeric_limits<double>::quiet_NaN();
+    return std::min(1.0, movement_from + (u - movement_start) / (1.0 - movement_start) * (1.0 - movement_from));
+  }
+  bool trimmed() const { return !planned && knots.front().second > 1e-12; }
 };
 
 // The unit's last `shown` seconds of `unit_s`, warped linearly onto the slot.
@@ -293,6 +306,29 @@ StreamWarp MakeWarp(double unit_s, double slot_s, double arrival_s, double onset
   if (shown <= movement) return LastPart(unit_s, shown);
   const double c = shown / slot_s, kept_arrival = shown - movement;
   w.knots = {{0.0, f(l - kept_arrival)}, {s(kept_arrival / c), f(l)}, {s(kept_arrival / c), f(m)}, {1.0, 1.0}};
+  return w;
+}
+
+// ConcatOptions::movement_onsets. A stream of a unit of unit_s seconds
+// arrives at its leaving key until arrival_s, holds it until onset_s and
+// moves to the arriving key; the movement is laid linearly from start_s
+// (re the slot's start; negative: before it) to the slot's end, superposed
+// on the arrival (at its own speed) and the hold (stretched until the
+// movement starts, or shown within a tenth of the slot after the arrival
+// when the movement starts earlier).
+StreamWarp OnsetWarp(double unit_s, double slot_s, double arrival_s, double onset_s, double start_s) {
+  StreamWarp w;
+  if (!(unit_s > 0) || !(slot_s > 0) || !(start_s < slot_s)) return w;
+  const double m = std::clamp(onset_s, 0.0, unit_s), l = std::clamp(arrival_s, 0.0, m);
+  const double a = std::min(l, slot_s);
+  const double hold_end = start_s > a ? start_s : std::min(slot_s, a + std::min(m - l, 0.1 * slot_s));
+  w.knots = {{0.0, 0.0}};
+  if (a > 0 && a < hold_end) w.knots.push_back({a / slot_s, l / unit_s});
+  if (hold_end > 0) w.knots.push_back({hold_end / slot_s, m / unit_s});
+  w.knots.push_back({1.0, m / unit_s});
+  w.planned = true;
+  w.movement_from = m / unit_s;
+  w.movement_start = start_s / slot_s;
   return w;
 }
 
@@ -450,6 +486,8 @@ std::string ConcatOptions::Check() const {
   if (posture_min_instances < 1) return "posture_min_instances must be >= 1";
   if (!(max_compression == 0 || (max_compression >= 1 && max_compression < 1e6)))
     return "max_compression must be 0 or >= 1";
+  if (keep_movement_duration && movement_onsets) return "keep_movement_duration and movement_onsets exclude each other";
+  if (!(max_onset_overlap >= 0 && max_onset_overlap <= 1)) return "max_onset_overlap must be in [0, 1]";
   return "";
 }
 
@@ -562,7 +600,7 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
   // a stream whose key component does not change holds all along.
   // The pose stream first arrives at the leaving key's placement (DikeyUnit::from_placement_lag_s).
   std::vector<double> shape_onset(d.dikeys.size()), pose_onset(d.dikeys.size()), pose_arrival(d.dikeys.size());
-  if (o.keep_movement_duration) {
+  if (o.keep_movement_duration || o.movement_onsets) {
     const Eigen::VectorXd inv = ColumnSigma(spread, rows, P + 6).cwiseInverse();
     for (size_t j = 0; j < d.dikeys.size(); ++j) {
       const DikeyUnit& u = d.dikeys[j];
@@ -575,23 +613,68 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
                           : MovementOnset(u.forearm_in_head, inv.tail(6), u.rate_hz, pose_arrival[j]);
     }
   }
-  auto shape_warp = [&](int j, double slot_s) {
+  // ConcatOptions::movement_onsets: where unit j's movement (from onset_s)
+  // starts in slot i (keys i → i + 1, slot_s long), re the slot's start;
+  // nullopt: warped as without the option.
+  auto planned_start = [&](int j, size_t i, double onset_s, double slot_s) -> std::optional<double> {
     const DikeyUnit& u = d.dikeys[static_cast<size_t>(j)];
-    return MakeWarp(u.duration_s(), slot_s, 0.0, shape_onset[static_cast<size_t>(j)], o);
+    const KeyTarget& k = keys[i + 1];
+    const double movement = u.duration_s() - onset_s;
+    if (!o.movement_onsets || !(movement > 0) || !std::isfinite(k.a1_s) || !std::isfinite(u.phasing_s))
+      return std::nullopt;
+    if (u.to_type && k.type && *u.to_type != *k.type) return std::nullopt;
+    const double room = i > 0 ? o.max_onset_overlap * (keys[i].target_s - keys[i - 1].target_s) : 0.0;
+    const double cmax = o.max_compression > 0 ? o.max_compression : kInf;
+    const double start =
+        std::min(std::max(k.a1_s + u.phasing_s - movement - keys[i].target_s, -room), slot_s - movement / cmax);
+    if (start < -room) return std::nullopt;  // even the compressed movement would overlap too much
+    return start;
   };
-  auto pose_warp = [&](int j, double slot_s) {
+  auto shape_warp = [&](int j, size_t i, double slot_s) {
     const DikeyUnit& u = d.dikeys[static_cast<size_t>(j)];
-    return MakeWarp(u.duration_s(), slot_s, pose_arrival[static_cast<size_t>(j)], pose_onset[static_cast<size_t>(j)],
-                    o);
+    const double onset = shape_onset[static_cast<size_t>(j)];
+    if (const auto start = planned_start(j, i, onset, slot_s))
+      return OnsetWarp(u.duration_s(), slot_s, 0.0, onset, *start);
+    return MakeWarp(u.duration_s(), slot_s, 0.0, onset, o);
+  };
+  auto pose_warp = [&](int j, size_t i, double slot_s) {
+    const DikeyUnit& u = d.dikeys[static_cast<size_t>(j)];
+    const double onset = pose_onset[static_cast<size_t>(j)], arrival = pose_arrival[static_cast<size_t>(j)];
+    if (const auto start = planned_start(j, i, onset, slot_s))
+      return OnsetWarp(u.duration_s(), slot_s, arrival, onset, *start);
+    return MakeWarp(u.duration_s(), slot_s, arrival, onset, o);
+  };
+  // A planned stream whose movement starts before the slot begins it, for
+  // the joins and the smoothing, at its unit's first row: the movement's
+  // displacement until the slot's start is added to the previous slot.
+  auto overlap_fix = [&](DikeyCandidate& c) {
+    const DikeyUnit &us = d.dikeys[static_cast<size_t>(c.shape_unit)], &up = d.dikeys[static_cast<size_t>(c.pose_unit)];
+    if (c.shape_warp.planned) {
+      c.first.head(P) = us.hand_params.row(0);
+      if (c.key_offset.size()) c.key_offset.head(P).setZero();
+    }
+    if (c.pose_warp.planned) {
+      c.first.tail(12) = DikeyRow(up, 0.0).tail(12);
+      if (c.key_offset.size()) c.key_offset.tail(12).setZero();
+    }
   };
   // A candidate's two streams at slot fraction u, each through its warp.
   auto unit_row = [](const DikeyUnit& u, const StreamWarp& w, double f) {
     return w.UnitFraction(f) * static_cast<double>(u.frames() - 1);
   };
+  // A planned movement's displacement at slot fraction f (zero before it starts).
+  auto displacement = [](const DikeyUnit& u, const StreamWarp& w, double f) {
+    const double g = w.MovementFraction(f);
+    const double rows = static_cast<double>(u.frames() - 1);
+    if (!std::isfinite(g)) return Eigen::RowVectorXd(Eigen::RowVectorXd::Zero(u.hand_params.cols() + 12));
+    return Eigen::RowVectorXd(DikeyRow(u, g * rows) - DikeyRow(u, w.movement_from * rows));
+  };
   auto streams_at = [&](int s, const StreamWarp& ws, int p, const StreamWarp& wp, double f) {
     const DikeyUnit &us = d.dikeys[static_cast<size_t>(s)], &up = d.dikeys[static_cast<size_t>(p)];
     Eigen::RowVectorXd v = DikeyRow(us, unit_row(us, ws, f));
     v.tail(12) = DikeyRow(up, unit_row(up, wp, f)).tail(12);
+    if (ws.planned) v.head(P) += displacement(us, ws, f).head(P);
+    if (wp.planned) v.tail(12) += displacement(up, wp, f).tail(12);
     return v;
   };
 
@@ -618,8 +701,8 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
         DikeyCandidate c;
         c.level = level;
         c.shape_unit = c.pose_unit = j;
-        c.shape_warp = shape_warp(j, target);
-        c.pose_warp = pose_warp(j, target);
+        c.shape_warp = shape_warp(j, i, target);
+        c.pose_warp = pose_warp(j, i, target);
         c.used_to = to;
         c.selection = std::abs(mismatch[static_cast<size_t>(j)]);
         c.first = streams_at(j, c.shape_warp, j, c.pose_warp, 0);
@@ -628,6 +711,7 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
           c.key_offset = untrimmed - c.first;
           c.first = untrimmed;
         }
+        overlap_fix(c);
         c.last = DikeyRow(u, static_cast<double>(u.frames() - 1));
         c.end = c.last;
         if (level == FallbackLevel::kClosestPlacement)
@@ -676,8 +760,8 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
           c.used_to = k1;
           const double ms = mismatch[static_cast<size_t>(s)], mp = mismatch[static_cast<size_t>(p)];
           c.selection = std::sqrt(0.5 * (ms * ms + mp * mp));
-          c.shape_warp = shape_warp(s, target);
-          c.pose_warp = pose_warp(p, target);
+          c.shape_warp = shape_warp(s, i, target);
+          c.pose_warp = pose_warp(p, i, target);
           c.first = streams_at(s, c.shape_warp, p, c.pose_warp, 0);
           if (o.trim_keeps_key_posture && (c.shape_warp.trimmed() || c.pose_warp.trimmed())) {
             Eigen::RowVectorXd untrimmed = DikeyRow(us, 0.0);
@@ -685,6 +769,7 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
             c.key_offset = untrimmed - c.first;
             c.first = untrimmed;
           }
+          overlap_fix(c);
           c.last = DikeyRow(us, static_cast<double>(us.frames() - 1));
           c.last.tail(12) = DikeyRow(up, static_cast<double>(up.frames() - 1)).tail(12);
           c.end = c.last;
@@ -783,6 +868,25 @@ HandTrack ConcatenateDikeys(const Dictionary& d, const std::vector<KeyTarget>& k
   const int64_t frames = static_cast<int64_t>(std::llround(duration_s * o.rate_hz)) + 1;
   Eigen::MatrixXd track(frames, C);
   Render(key_frames, o.smoothing, sample, first, last, end, &track);
+  // Overlapping movements (ConcatOptions::movement_onsets): each one's
+  // displacement from its starting posture, added to the previous slot's
+  // frames from its onset on (the slot's warp continued backwards).
+  for (size_t i = 1; i < slots; ++i) {
+    const DikeyCandidate& c = chosen(i);
+    const int64_t f0 = key_frames[i], f1 = key_frames[i + 1];
+    if (c.level == FallbackLevel::kInterpolated || f1 <= f0) continue;
+    const double n = static_cast<double>(f1 - f0);
+    auto add = [&](const DikeyUnit& u, const StreamWarp& w, Eigen::Index col, Eigen::Index cols, bool pose) {
+      if (!w.planned || !(w.movement_start < 0)) return;
+      const auto first_frame = static_cast<int64_t>(std::ceil(static_cast<double>(f0) + w.movement_start * n));
+      for (int64_t f = std::max<int64_t>(first_frame, 0); f <= f0 && f < frames; ++f) {
+        const Eigen::RowVectorXd v = displacement(u, w, static_cast<double>(f - f0) / n);
+        track.row(f).segment(col, cols) += pose ? Eigen::RowVectorXd(v.tail(12)) : Eigen::RowVectorXd(v.head(P));
+      }
+    };
+    add(d.dikeys[static_cast<size_t>(c.shape_unit)], c.shape_warp, 0, P, false);
+    add(d.dikeys[static_cast<size_t>(c.pose_unit)], c.pose_warp, P, 12, true);
+  }
 
   out.rate_hz = o.rate_hz;
   out.hand_params = track.leftCols(P);

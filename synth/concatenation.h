@@ -12,6 +12,7 @@
 // the virtual cuer's marker names or proportions.
 #include <Eigen/Core>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,11 @@ namespace csw::dict {
 struct KeyTarget {
   KeyCode code;
   double target_s = 0;
+  // The acoustic onset of the key's syllable (output clock; NaN: unknown,
+  // rests) and the key's type: ConcatOptions::movement_onsets plans each
+  // movement's onset from them.
+  double a1_s = std::numeric_limits<double>::quiet_NaN();
+  std::optional<KeyType> type = std::nullopt;
 };
 
 struct ConcatOptions {
@@ -83,6 +89,29 @@ struct ConcatOptions {
   // marker jump rises from 16.9 to 17.4 mm (the bar: 17.0), as movements
   // the linear warp stretched keep their speed; hence off by default.
   bool keep_movement_duration = false;
+  // Movement onsets from the units' own phasing (exclusive with
+  // keep_movement_duration). In each stream (hand shape; forearm-in-head
+  // with the head) whose key component changes, the unit's movement (from
+  // its onset, found as for keep_movement_duration, to its end) is laid
+  // linearly from a planned onset to the arriving key's target, the
+  // leaving key's arrival and hold before it. The planned onset is the
+  // arriving key's A1 (KeyTarget::a1_s) plus the unit's own onset phasing:
+  // DikeyUnit::phasing_s minus the movement's duration, i.e. where the
+  // movement started relative to its syllable in the corpus. It is kept
+  // late enough that the movement is compressed at most max_compression
+  // times. When it falls before the slot's start, the movement overlaps the
+  // previous slot, as a cuer's does: its displacement from the posture
+  // where it starts is added to the previous slot's frames from the onset
+  // on. The overlap is at most max_onset_overlap × the previous slot (an
+  // earlier onset is moved there; a slot whose compressed movement would
+  // need more is warped as without this option). Units of another key type
+  // than the planned key's, keys without A1 and unknown phasing: as without
+  // it. Measured on 30 held-out sentences (docs/synthesis.md), 0.3: lone-C
+  // shape onsets 49 -> 30 ms early against the corpus's, CV placement onsets
+  // 34 -> 31 ms late, key accuracy 95.4 -> 95.7 %; but the CV placement
+  // targets 2 ms further from the corpus's (to its 20 ms bar); off by default.
+  bool movement_onsets = false;
+  double max_onset_overlap = 0.3;
   // A trimmed unit still starts at its leaving key's posture: the trimmed
   // part's offset is added back, fading linearly to 0 over the slot, so
   // the key is reached at its frame and the movement that follows is

@@ -88,7 +88,16 @@ Synthesis Synthesize(const Utterance& utterance, const Dictionary& dictionary, c
   const double rate = concat.rate_hz;
 
   std::vector<KeyTarget> targets;
-  for (const PlannedKey& k : s.plan.keys) targets.push_back({k.code, k.target_s});
+  for (const PlannedKey& k : s.plan.keys) {
+    KeyTarget t;
+    t.code = k.code;
+    t.target_s = k.target_s;
+    if (k.type != KeyType::kRest) {
+      t.a1_s = k.a1_s;
+      t.type = k.type;
+    }
+    targets.push_back(t);
+  }
   s.hand = ConcatenateDikeys(dictionary, targets, duration, concat);
 
   s.phones = utterance.phones;

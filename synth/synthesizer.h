@@ -41,7 +41,10 @@ struct SynthesisOptions {
   // posture, and each key's hand is pulled to within 0.5 of its code's
   // standard deviations of the code's exemplar (30 held-out sentences: key
   // accuracy 89.4 % without either, 92.8 % with the first, 94.9 % with the
-  // second, 96.6 % with both; docs/synthesis.md).
+  // second, 96.6 % with both; docs/synthesis.md). Movement onsets
+  // (concat.movement_onsets) stay off: on the same sentences they move the
+  // lone-C shape onsets from 49 to 30 ms early against the corpus's, but the
+  // CV placement targets 2 ms further from the corpus's, to its 20 ms bar.
   ConcatOptions concat = [] {
     ConcatOptions c;
     c.rate_hz = 0;

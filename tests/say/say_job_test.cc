@@ -105,6 +105,9 @@ TEST(SayOptions, RequiredOptionsAndReasons) {
   o = Valid();
   o.rbf_shape = 0;
   EXPECT_EQ(o.Check(), "--rbf-shape must be in (0, 100]");
+  o = Valid();
+  o.max_onset_overlap = 1.5;
+  EXPECT_EQ(o.Check(), "--max-overlap must be in [0, 1]");
 }
 
 TEST(ReadSentences, TrimsSkipsCommentsAndNamesBadLines) {
@@ -330,6 +333,7 @@ TEST_F(SayJob, SynthesisesACorpusSentenceFromWholeDikeys) {
   EXPECT_TRUE(fs::exists(out / "synthesis.h5"));
   EXPECT_TRUE(fs::exists(out / "say.json"));
   EXPECT_EQ(r["dikey_warp"], "linear");
+  EXPECT_TRUE(r["max_overlap"].is_null());
 
   // --keep-movement-durations: the same keys reached, the warp named. With a
   // corpus phasing file that holds only the CV shape target (mean 40 ms,
@@ -350,9 +354,24 @@ TEST_F(SayJob, SynthesisesACorpusSentenceFromWholeDikeys) {
   EXPECT_TRUE(cv["placement_target_difference_ms"].is_null()) << cv.dump();
   EXPECT_TRUE(cv["shape_onset_difference_ms"].is_null()) << cv.dump();
   EXPECT_EQ(kept["dikey_warp"], "movements kept");
+  EXPECT_TRUE(kept["max_overlap"].is_null());
   EXPECT_GE(kept["check"]["keys"]["accuracy"].get<double>(), 0.9) << kept["check"].dump();
   EXPECT_LE(kept["check"]["continuity"]["max_jump_mm"].get<double>(),
             kept["sentences"][0]["speed_limit"]["limit_mm"].get<double>() + 1e-6);
+
+  // --movement-onsets: the warp and its overlap named, the keys still read,
+  // the speed limit kept; with --keep-movement-durations the kept durations
+  // win (above: "movements kept").
+  o.keep_movement_durations = false;
+  o.movement_onsets = true;
+  o.max_onset_overlap = 0.25;
+  o.output = (fx.dir / "say-onsets").string();
+  const json onsets = Say(o, progress);
+  EXPECT_EQ(onsets["dikey_warp"], "movement onsets");
+  EXPECT_EQ(onsets["max_overlap"], 0.25);
+  EXPECT_GE(onsets["check"]["keys"]["accuracy"].get<double>(), 0.9) << onsets["check"].dump();
+  EXPECT_LE(onsets["check"]["continuity"]["max_jump_mm"].get<double>(),
+            onsets["sentences"][0]["speed_limit"]["limit_mm"].get<double>() + 1e-6);
 }
 
 TEST_F(SayJob, FragmentsTakeACorpusSentencesFaceFromItsOwnTake) {

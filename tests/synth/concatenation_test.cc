@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -303,6 +304,128 @@ TEST(ConcatenateDikeys, KeptMovementDurationsKeepThePlacementsArrivalToo) {
   const HandTrack linear = ConcatenateDikeys(d, keys, 1.3, o);
   EXPECT_LT(MaxAbsDiff(linear.forearm_in_head.row(50), ForearmValue(1)), kTol);
   EXPECT_NEAR(linear.keys[1].leaving_placement_lag_s, 0.0, 1e-12);
+}
+
+// The hold-then-move unit as a CV key's dikey whose target came 50 ms after
+// its syllable's A1 in the corpus, between 00 → 12 (0.5 s, a linear ramp) and
+// 35 → 00; the keys 12 at 0.5 s, 35 at 0.9 s (A1 given), 00 at 1.3 s.
+Dictionary OnsetDictionary(std::optional<KeyType> unit_type) {
+  DikeyUnit u = HoldThenMove();
+  u.phasing_s = 0.05;
+  u.to_type = unit_type;
+  return DikeyDictionary({Dikey("00", "12", 0.5), u, Dikey("35", "00", 0.4)});
+}
+std::vector<KeyTarget> OnsetKeys(double a1_of_35) {
+  auto keys = Keys({{"00", 0.0}, {"12", 0.5}, {"35", 0.9}, {"00", 1.3}});
+  keys[2].a1_s = a1_of_35;
+  keys[2].type = KeyType::kCV;
+  return keys;
+}
+
+TEST(ConcatenateDikeys, MovementOnsetsStartEachMovementAtItsSyllablesPhasing) {
+  // Movement onsets by the documented rule: shape row 27, pose row 37 (see
+  // KeptMovementDurations...), so the unit's shape movement lasts 0.33 s and
+  // started 0.05 − 0.33 = −0.28 s from A1, the pose movement 0.23 s from
+  // −0.18 s. With A1 at 0.80 s the shape movement is laid on 0.52-0.90 s
+  // (unit time 0.27 + (t − 0.52) · 0.33 / 0.38; its ramp, rows 30-60, starts
+  // at 0.5545 s) and the pose movement on 0.62-0.90 s (unit time 0.37 +
+  // (t − 0.62) · 0.23 / 0.28). The linear warp instead trims the unit's
+  // first 0.1 s: the shape ramp starts at frame 66.
+  const Dictionary d = OnsetDictionary(KeyType::kCV);
+  ConcatOptions o;
+  o.max_compression = 1.25;
+  o.movement_onsets = true;
+  const HandTrack t = ConcatenateDikeys(d, OnsetKeys(0.80), 1.3, o);
+  auto shape_at = [](double a) { return ((1 - a) * ShapeValue(2) + a * ShapeValue(5)).eval(); };
+  auto pose_at = [](double a) { return ((1 - a) * ForearmValue(1) + a * ForearmValue(3)).eval(); };
+  auto head_at = [](double a) { return ((1 - a) * HeadValue(1) + a * HeadValue(3)).eval(); };
+  auto shape_row = [](double time) { return 100.0 * (0.27 + (time - 0.52) * 0.33 / 0.38); };
+  auto pose_row = [](double time) { return 100.0 * (0.37 + (time - 0.62) * 0.23 / 0.28); };
+  for (Eigen::Index f = 50; f <= 55; ++f) EXPECT_LT(MaxAbsDiff(t.hand_params.row(f), ShapeValue(2)), kTol) << f;
+  for (Eigen::Index f = 56; f <= 90; ++f) {
+    const double a = std::clamp((shape_row(f / kRate) - 30.0) / 30.0, 0.0, 1.0);
+    EXPECT_LT(MaxAbsDiff(t.hand_params.row(f), shape_at(a)), 1e-9) << f;
+  }
+  EXPECT_NEAR((shape_row(0.70) - 30.0) / 30.0, 0.421053, 1e-6);  // the check above at frame 70, by hand
+  for (Eigen::Index f = 50; f <= 65; ++f) EXPECT_LT(MaxAbsDiff(t.forearm_in_head.row(f), ForearmValue(1)), kTol) << f;
+  EXPECT_LT(MaxAbsDiff(t.forearm_in_head.row(80), pose_at((pose_row(0.80) - 40.0) / 20.0)), 1e-9);
+  EXPECT_LT(MaxAbsDiff(t.head_pose.row(80), head_at((pose_row(0.80) - 40.0) / 20.0)), 1e-9);
+  EXPECT_NEAR((pose_row(0.80) - 40.0) / 20.0, 0.589286, 1e-6);
+  EXPECT_LT(MaxAbsDiff(t.forearm_in_head.row(90), ForearmValue(3)), kTol);
+  // The previous slot is untouched: the 00 → 12 ramp.
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(45), 0.1 * ShapeValue(0) + 0.9 * ShapeValue(2)), kTol);
+
+  o.movement_onsets = false;
+  const HandTrack linear = ConcatenateDikeys(d, OnsetKeys(0.80), 1.3, o);
+  EXPECT_LT(MaxAbsDiff(linear.hand_params.row(66), ShapeValue(2)), kTol);
+  EXPECT_GT(MaxAbsDiff(linear.hand_params.row(60), t.hand_params.row(60)), 0.1);
+}
+
+TEST(ConcatenateDikeys, AnEarlyMovementOverlapsThePreviousSlot) {
+  // A1 at 0.70 s: the shape movement starts at 0.70 + 0.05 − 0.33 = 0.42 s,
+  // 0.08 s before its slot (allowed: up to 0.3 of the previous 0.5 s slot).
+  // It is laid on 0.42-0.90 s (unit time 0.27 + (t − 0.42) · 0.33 / 0.48),
+  // and before 0.5 s its displacement from the held shape 2 is added to the
+  // 00 → 12 ramp. The pose movement starts at 0.52 s, inside its slot.
+  const Dictionary d = OnsetDictionary(KeyType::kCV);
+  ConcatOptions o;
+  o.max_compression = 1.25;
+  o.movement_onsets = true;
+  const HandTrack t = ConcatenateDikeys(d, OnsetKeys(0.70), 1.3, o);
+  auto shape_at = [](double a) { return ((1 - a) * ShapeValue(2) + a * ShapeValue(5)).eval(); };
+  auto pose_at = [](double a) { return ((1 - a) * ForearmValue(1) + a * ForearmValue(3)).eval(); };
+  auto ramp = [](double a) { return ((1 - a) * ShapeValue(0) + a * ShapeValue(2)).eval(); };
+  // Frame 48: unit time 0.31125 (row 31.125, 0.0375 of the ramp), on the
+  // 00 → 12 ramp at 0.96.
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(48), ramp(0.96) + shape_at(0.0375) - ShapeValue(2)), 1e-9);
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(40), ramp(0.8)), kTol);             // before 0.42 s: untouched
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(50), shape_at(2.5 / 30.0)), 1e-9);  // row 32.5
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(60), shape_at(0.3125)), 1e-9);      // row 39.375
+  EXPECT_LT(MaxAbsDiff(t.hand_params.row(90), ShapeValue(5)), kTol);
+  // Pose: unit time 0.37 + (0.80 − 0.52) · 0.23 / 0.38 at frame 80 (row 53.95).
+  EXPECT_LT(MaxAbsDiff(t.forearm_in_head.row(80), pose_at((100.0 * (0.37 + 0.28 * 0.23 / 0.38) - 40.0) / 20.0)), 1e-9);
+  // No step anywhere: frame-to-frame changes stay below the fastest ramp's.
+  for (Eigen::Index f = 1; f < t.frames(); ++f)
+    EXPECT_LT(MaxAbsDiff(t.hand_params.row(f), t.hand_params.row(f - 1)), 0.5) << f;
+
+  // The overlap capped at a tenth of the previous slot: the movement starts
+  // at 0.45 s (unit time 0.27 + (t − 0.45) · 0.33 / 0.45; row 38 at 0.6 s).
+  o.max_onset_overlap = 0.1;
+  const HandTrack capped = ConcatenateDikeys(d, OnsetKeys(0.70), 1.3, o);
+  EXPECT_LT(MaxAbsDiff(capped.hand_params.row(60), shape_at(8.0 / 30.0)), 1e-9);
+  EXPECT_LT(MaxAbsDiff(capped.hand_params.row(45), ramp(0.9)), kTol);
+  // None: it starts with its slot (unit time 0.27 + (t − 0.5) · 0.33 / 0.4;
+  // row 35.25 at 0.6 s) and the previous slot is the plain ramp.
+  o.max_onset_overlap = 0;
+  const HandTrack none = ConcatenateDikeys(d, OnsetKeys(0.70), 1.3, o);
+  EXPECT_LT(MaxAbsDiff(none.hand_params.row(60), shape_at(5.25 / 30.0)), 1e-9);
+  EXPECT_LT(MaxAbsDiff(none.hand_params.row(48), ramp(0.96)), kTol);
+}
+
+TEST(ConcatenateDikeys, MovementOnsetsNeedTheKeysA1AndAUnitOfItsType) {
+  // A unit measured on a lone vowel (another A1), or a key without A1: the
+  // slot is warped as without the option. Both warp options at once, or an
+  // overlap outside [0, 1], are refused.
+  ConcatOptions o;
+  o.max_compression = 1.25;
+  const HandTrack plain = ConcatenateDikeys(OnsetDictionary(KeyType::kCV), OnsetKeys(0.80), 1.3, o);
+  o.movement_onsets = true;
+  const HandTrack other_type = ConcatenateDikeys(OnsetDictionary(KeyType::kVowelAlone), OnsetKeys(0.80), 1.3, o);
+  EXPECT_LT((other_type.hand_params - plain.hand_params).cwiseAbs().maxCoeff(), kTol);
+  EXPECT_LT((other_type.forearm_in_head - plain.forearm_in_head).cwiseAbs().maxCoeff(), kTol);
+  const HandTrack no_a1 =
+      ConcatenateDikeys(OnsetDictionary(KeyType::kCV), OnsetKeys(std::numeric_limits<double>::quiet_NaN()), 1.3, o);
+  EXPECT_LT((no_a1.hand_params - plain.hand_params).cwiseAbs().maxCoeff(), kTol);
+  o.keep_movement_duration = true;
+  try {
+    ConcatenateDikeys(OnsetDictionary(KeyType::kCV), OnsetKeys(0.80), 1.3, o);
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidInput& e) {
+    EXPECT_THAT(e.what(), HasSubstr("keep_movement_duration and movement_onsets exclude each other"));
+  }
+  o.keep_movement_duration = false;
+  o.max_onset_overlap = 1.5;
+  EXPECT_THROW(ConcatenateDikeys(OnsetDictionary(KeyType::kCV), OnsetKeys(0.80), 1.3, o), InvalidInput);
 }
 
 TEST(ConcatenateDikeys, LeavingPlacementLagFollowsTheSlotsWarpAndTrim) {

@@ -781,6 +781,14 @@ class SayCommand : public Command {
     sub_->add_flag("--keep-movement-durations", options_.keep_movement_durations,
                    "Each dikey's movements keep their corpus duration and the holds before them fit the slot, "
                    "instead of warping whole units linearly (default: off; docs/synthesis.md)");
+    sub_->add_flag("--movement-onsets", options_.movement_onsets,
+                   "Each dikey's movements start at their syllable's A1 plus the unit's own onset phasing, "
+                   "overlapping the previous key when that is earlier (default: off; --keep-movement-durations "
+                   "replaces it; docs/synthesis.md)");
+    sub_->add_option("--max-overlap", options_.max_onset_overlap,
+                     "--movement-onsets: how far a movement may start before its slot, as a fraction of the "
+                     "previous slot (0-1)")
+        ->capture_default_str();
     sub_->add_option("--posture-radius", options_.posture_radius,
                      "Key posture pull: a hand farther than this (in its key code's standard deviations) from the "
                      "code's mean posture is moved toward the code's exemplar (0 = off; docs/synthesis.md)")

@@ -93,6 +93,7 @@ std::string SayOptions::Check() const {
   if (!(concatenation_weight >= 0 && concatenation_weight < 1e6)) return "--concatenation-weight must be >= 0";
   if (!(target_weight >= 0 && target_weight < 1e6)) return "--target-weight must be >= 0";
   if (!(posture_radius >= 0 && posture_radius < 1e6)) return "--posture-radius must be >= 0";
+  if (!(max_onset_overlap >= 0 && max_onset_overlap <= 1)) return "--max-overlap must be in [0, 1]";
   if (face_units != "diphones" && face_units != "fragments") return "--face-units must be diphones or fragments";
   if (dict::Resampling r; !dict::ParseResampling(resampling, &r)) return "--resampling must be rbf or linear";
   if (!(blend >= 0 && blend <= 1)) return "--blend must be in [0, 1]";
@@ -136,6 +137,9 @@ json Say(const SayOptions& options, Progress& progress) {
   so.concat.trim_keeps_key_posture = options.keep_key_postures;
   so.concat.posture_radius = options.posture_radius;
   so.concat.keep_movement_duration = options.keep_movement_durations;
+  // --keep-movement-durations sets where movements start in its own way: it replaces the onsets.
+  so.concat.movement_onsets = options.movement_onsets && !options.keep_movement_durations;
+  so.concat.max_onset_overlap = options.max_onset_overlap;
   so.face_fragments = options.face_units == "fragments";
   dict::ParseResampling(options.resampling, &so.fragments.resampling);
   so.fragments.blend_fraction = options.blend;
@@ -150,14 +154,19 @@ json Say(const SayOptions& options, Progress& progress) {
   fs::remove(corpus_path, ec);  // this command's own output, replaced
   CorpusTransaction tx(corpus_path);
 
-  json result = {{"dict", options.dict},
-                 {"models", options.models},
-                 {"output", options.output},
-                 {"phasing", options.phasing},
-                 {"dikey_warp", options.keep_movement_durations ? "movements kept" : "linear"},
-                 {"corpus", corpus_path},
-                 {"sentences", json::array()},
-                 {"face_units", options.face_units}};
+  json result = {
+      {"dict", options.dict},
+      {"models", options.models},
+      {"output", options.output},
+      {"phasing", options.phasing},
+      {"dikey_warp", options.keep_movement_durations ? "movements kept"
+                     : options.movement_onsets       ? "movement onsets"
+                                                     : "linear"},
+      {"max_overlap",
+       options.movement_onsets && !options.keep_movement_durations ? json(options.max_onset_overlap) : json(nullptr)},
+      {"corpus", corpus_path},
+      {"sentences", json::array()},
+      {"face_units", options.face_units}};
   if (so.face_fragments)
     result["fragments"] = {{"resampling", options.resampling},
                            {"rbf_shape", options.rbf_shape},

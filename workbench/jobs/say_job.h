@@ -41,6 +41,8 @@ struct SayOptions {
   bool keep_key_postures = true;         // a trimmed dikey still starts at its key's posture (ConcatOptions)
   double posture_radius = 0.5;           // key posture pull toward the code's exemplar (ConcatOptions), 0 = off
   bool keep_movement_durations = false;  // each dikey stream's movement keeps its duration (ConcatOptions)
+  bool movement_onsets = false;          // movements start at A1 + the units' onset phasing (ConcatOptions)
+  double max_onset_overlap = 0.3;        // ... overlapping the previous slot by at most this fraction of it
   std::string face_units = "diphones";   // "diphones" (Viterbi) or "fragments" (seed-003, synth/fragments.h)
   std::string resampling = "rbf";        // fragments: "rbf" (inverse multiquadric) or "linear"
   double rbf_shape = 2;                  // fragments: inverse-multiquadric shape, in smallest sample spacings
