@@ -40,6 +40,9 @@ TEST(KeysOptionsCheck, RequiredOptionsAndReasons) {
   EXPECT_EQ(s.Check(), "");
   s.decode.min_key_ms = -1;
   EXPECT_EQ(s.Check(), "min_key_ms must be > 0");
+  s.decode.min_key_ms = 80;
+  s.decode.aligned_floor = 0;  // --aligned-floor 0
+  EXPECT_EQ(s.Check(), "aligned_floor must be in (0, 1)");
 }
 
 TEST(KeysText, RendersTheScoreReport) {
@@ -123,6 +126,10 @@ TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
     EXPECT_LE(tiers["placement_aligned"]->labels.size(), tiers["placement_targets"]->labels.size());
     EXPECT_GT(tiers["keys_decoded"]->labels.size(), 0u);
   }
+  // The decoding options used, the defaults here.
+  EXPECT_EQ(sr["decoding"]["min_key_ms"], 80.0);
+  EXPECT_EQ(sr["decoding"]["aligned_floor"], 3e-3);
+  EXPECT_EQ(sr["decoding"]["anchor_nearest"], true);
   EXPECT_EQ(sr["shape"]["count"].get<int64_t>(), expected);
   EXPECT_EQ(sr["sequence"]["free"]["keys_expected"].get<int64_t>(), expected);
   EXPECT_EQ(sr["sequence"]["aligned"]["keys_expected"].get<int64_t>(), expected);
@@ -141,6 +148,20 @@ TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
   // Four training sentences, no occlusions: most labelled frames are right.
   EXPECT_GE(sr["shape"]["accuracy"].get<double>(), 0.6);
   EXPECT_GE(sr["placement"]["accuracy"].get<double>(), 0.6);
+  {
+    // --aligned-floor 1e-6 --no-anchor-nearest --dry-run: reported, the same
+    // keys aligned, and the frames' accuracies (not decoding) unchanged.
+    KeysScoreOptions o = s;
+    o.figures.clear();
+    o.dry_run = true;
+    o.decode.aligned_floor = 1e-6;
+    o.anchor_nearest = false;
+    const json r2 = KeysScore(o, progress);
+    EXPECT_EQ(r2["decoding"]["aligned_floor"], 1e-6);
+    EXPECT_EQ(r2["decoding"]["anchor_nearest"], false);
+    EXPECT_EQ(r2["sequence"]["aligned"]["keys_expected"], sr["sequence"]["aligned"]["keys_expected"]);
+    EXPECT_EQ(r2["shape"]["accuracy"], sr["shape"]["accuracy"]);
+  }
 
   // The posteriors stored in the corpus are those of the model on the take's
   // features, bit for bit (score set "keys", row-major frames × classes).

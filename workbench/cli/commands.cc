@@ -571,6 +571,13 @@ class KeysCommand : public Command {
         ->capture_default_str();
     score_->add_option("--min-key", score_options_.decode.min_key_ms, "Free decoding: shortest key (ms)")
         ->capture_default_str();
+    score_
+        ->add_option("--aligned-floor", score_options_.decode.aligned_floor,
+                     "Aligned decoding: posterior floor before the log, (0, 1) (docs/analysis.md)")
+        ->capture_default_str();
+    score_->add_flag("!--no-anchor-nearest", score_options_.anchor_nearest,
+                     "Speech anchors: do not replace a target that lies nearer a neighbouring key's A1 + lag than "
+                     "its own (docs/analysis.md)");
     score_->add_flag("--dry-run", score_options_.dry_run, "Report only: write no tier nor scores");
     score_->add_option("--figures", score_options_.figures,
                        "Folder for the shape and placement confusion matrices (PNG), when takes have labels");

@@ -283,7 +283,13 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
     std::filesystem::create_directories(options.figures);
   }
 
-  json result = {{"corpus", options.corpus}, {"keys", options.keys}, {"takes", json::array()}};
+  json result = {{"corpus", options.corpus},
+                 {"keys", options.keys},
+                 {"takes", json::array()},
+                 {"decoding",
+                  {{"min_key_ms", options.decode.min_key_ms},
+                   {"aligned_floor", options.decode.aligned_floor},
+                   {"anchor_nearest", options.anchor_nearest}}}};
   Confusion shape(kNumShapes), placement(kNumPlacements);
   int free_correct = 0, free_expected = 0, free_ins = 0, free_del = 0, free_sub = 0;
   int aligned_correct = 0, aligned_expected = 0;
@@ -354,6 +360,7 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
       // Aligned decoding with kinematic target times (analysis/keys/key_timing.h).
       KeyTimingOptions timing;
       timing.decode = options.decode;
+      timing.anchor_nearest = options.anchor_nearest;
       const std::vector<TimedKey> aligned = DecodeAlignedTimed(model, features, post, expected_keys, rate, timing);
       LabelTier aligned_tier = PointTier("keys_aligned", end_s);
       LabelTier aligned_places = PointTier("placement_aligned", end_s);

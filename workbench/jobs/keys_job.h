@@ -68,6 +68,9 @@ struct KeysScoreOptions {
   // speech (analysis/keys/key_timing.h, "speech anchors"). "" = never.
   std::string phones = "phones";
   keys::DecodeOptions decode;
+  // Speech anchors: a changing target nearer a neighbouring key's A1 + lag
+  // than its own is replaced too (KeyTimingOptions::anchor_nearest).
+  bool anchor_nearest = true;
   bool dry_run = false;  // report only, write no tier nor scores
   std::string figures;   // folder for the confusion-matrix figures; "" = none
   std::string Check() const;
@@ -81,6 +84,7 @@ std::string KeysTrainText(const nlohmann::json& result);
 // {"corpus", "keys", "takes": [{"take", "frames", "decoded_keys", "tiers_written", "scores_written",
 //   "speech_anchors" (true when the phone tier's keys matched the labels), ...}],
 //  "shape": {"accuracy", "count", "confusion"}, "placement": {...},
+//  "decoding": {"min_key_ms", "aligned_floor", "anchor_nearest"} (the options used),
 //  "sequence": {"free": {"keys_correct", "keys_expected", "insertions", "deletions", "substitutions"},
 //               "aligned": {"keys_correct", "keys_expected", "target_error_ms": {"mean", "sd"}}}}
 // (the scoring members only when some take has the label tier), "figures": [paths] when drawn.
