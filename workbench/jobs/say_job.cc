@@ -154,19 +154,17 @@ json Say(const SayOptions& options, Progress& progress) {
   fs::remove(corpus_path, ec);  // this command's own output, replaced
   CorpusTransaction tx(corpus_path);
 
-  json result = {
-      {"dict", options.dict},
-      {"models", options.models},
-      {"output", options.output},
-      {"phasing", options.phasing},
-      {"dikey_warp", options.keep_movement_durations ? "movements kept"
-                     : options.movement_onsets       ? "movement onsets"
-                                                     : "linear"},
-      {"max_overlap",
-       options.movement_onsets && !options.keep_movement_durations ? json(options.max_onset_overlap) : json(nullptr)},
-      {"corpus", corpus_path},
-      {"sentences", json::array()},
-      {"face_units", options.face_units}};
+  json result = {{"dict", options.dict},
+                 {"models", options.models},
+                 {"output", options.output},
+                 {"phasing", options.phasing},
+                 {"dikey_warp", so.concat.keep_movement_duration ? "movements kept"
+                                : so.concat.movement_onsets      ? "movement onsets"
+                                                                 : "linear"},
+                 {"max_overlap", so.concat.movement_onsets ? json(so.concat.max_onset_overlap) : json(nullptr)},
+                 {"corpus", corpus_path},
+                 {"sentences", json::array()},
+                 {"face_units", options.face_units}};
   if (so.face_fragments)
     result["fragments"] = {{"resampling", options.resampling},
                            {"rbf_shape", options.rbf_shape},
