@@ -156,12 +156,17 @@ void AnchorToSpeech(std::vector<TimedKey>& keys, const std::vector<ExpectedKey>&
             }
         }
         if (!nearer_neighbour && std::abs(c.target_s - at) <=
-                                     std::max(options.anchor_outlier_sd * lag.spread, options.anchor_outlier_floor_s))
-          continue;
-        c.target_s = at;
-        c.onset_s = kNaN;
-        c.kinematic = false;
-        c.from_speech = true;
+                                     std::max(options.anchor_outlier_sd * lag.spread, options.anchor_outlier_floor_s)) {
+          if (!c.kinematic || !std::isfinite(c.target_sd_s) || !(options.anchor_fit_sd_factor > 0) || !(lag.spread > 0))
+            continue;
+          c.target_s = CombineWithSpeech(c.target_s, c.target_sd_s, at, lag.spread, options.anchor_fit_sd_factor);
+          c.speech_weighted = true;
+        } else {
+          c.target_s = at;
+          c.onset_s = kNaN;
+          c.kinematic = false;
+          c.from_speech = true;
+        }
         // The keys that hold this component keep its (new) target.
         for (size_t j = k + 1; j < keys.size() && !timing(j).changes; ++j) {
           const bool changes = timing(j).changes;
@@ -177,6 +182,13 @@ void AnchorToSpeech(std::vector<TimedKey>& keys, const std::vector<ExpectedKey>&
 }
 
 }  // namespace
+
+double CombineWithSpeech(double fit_s, double fit_sd_s, double anchor_s, double spread_s, double sd_factor) {
+  if (!(sd_factor > 0) || std::isnan(fit_sd_s) || !(spread_s > 0) || !std::isfinite(anchor_s)) return fit_s;
+  if (std::isinf(fit_sd_s)) return anchor_s;
+  const double v = sd_factor * sd_factor * fit_sd_s * fit_sd_s, p = spread_s * spread_s;
+  return (p * fit_s + v * anchor_s) / (p + v);
+}
 
 phasing::MovementFitOptions KeyTimingOptions::ShapeFitDefaults() {
   phasing::MovementFitOptions o;
@@ -198,6 +210,7 @@ std::string KeyTimingOptions::Check() const {
   if (!(anchor_outlier_sd > 0)) return "anchor_outlier_sd must be > 0";
   if (!(anchor_outlier_floor_s >= 0)) return "anchor_outlier_floor_s must be >= 0";
   if (anchor_min_keys < 1) return "anchor_min_keys must be >= 1";
+  if (!(anchor_fit_sd_factor >= 0)) return "anchor_fit_sd_factor must be >= 0";
   return "";
 }
 
@@ -272,6 +285,7 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
           timing[i].kinematic = true;
           timing[i].onset_s = m.onset_s;
           timing[i].target_s = m.target_s;
+          timing[i].target_sd_s = m.target_sd_s;
           fitted[i] = m.target_s;
         }
         times = fitted;
@@ -279,6 +293,7 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
       for (auto& c : timing)
         if (!c.kinematic) {
           c.onset_s = kNaN;
+          c.target_sd_s = kNaN;
           c.target_s = static_cast<double>(c.rough_frame) / rate_hz;
         }
     }

@@ -50,9 +50,15 @@
 // on the virtual cuer's spline/DCT-filled takes this took the worst aligned
 // error from 290 to 152 ms), and a repeated key takes A1 +
 // the shape lag instead of the interpolation above. Nothing is assumed about
-// the lag itself: another cuer's or lab's timing gives other lags. Without
-// anchors, as before.
+// the lag itself: another cuer's or lab's timing gives other lags. A fitted
+// target that stays (not an outlier) is combined with its A1 + lag by inverse
+// variance (CombineWithSpeech): the fit weighs 1 / (anchor_fit_sd_factor ×
+// its standard error)², A1 + lag 1 / spread², so a fit the data determine
+// well keeps its time and one they hardly determine (overlapping gestures
+// trading parts of their movements) leans on the speech. Without anchors, as
+// before.
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -78,7 +84,11 @@ struct KeyTimingOptions {
   double anchor_outlier_floor_s = 0.08;  // ... and further than this
   int anchor_min_keys = 3;               // changing targets needed to estimate a lag
   bool anchor_nearest = true;            // ... and so is one nearer a neighbour's A1 + lag than its own
-  std::string Check() const;             // "" when valid, else the reason
+  // A kept fitted target combined with A1 + lag (CombineWithSpeech); the
+  // fit's curvature standard error is multiplied by this (it understates the
+  // error of overlapping fits: docs/analysis.md); 0 = fits kept as they are.
+  double anchor_fit_sd_factor = 4.0;
+  std::string Check() const;  // "" when valid, else the reason
   static phasing::MovementFitOptions ShapeFitDefaults();
 };
 
@@ -91,6 +101,8 @@ struct ComponentTiming {
   double onset_s = 0.0;                        // movement onset (NaN unless kinematic)
   double target_s = 0.0;                       // target time: kinematic, else rough
   bool from_speech = false;                    // target replaced by A1 + lag (speech anchors)
+  double target_sd_s = std::numeric_limits<double>::quiet_NaN();  // the fit's standard error (NaN: no fit)
+  bool speech_weighted = false;                                   // target_s combined with A1 + lag (CombineWithSpeech)
 };
 
 struct TimedKey {
@@ -99,6 +111,13 @@ struct TimedKey {
   double target_s = 0.0;
   bool target_from_speech = false;  // a repeated key timed by its A1 + the shape lag
 };
+
+// The inverse-variance combination of a fitted target time fit_s (standard
+// error fit_sd_s, multiplied by sd_factor) with the speech's expectation
+// anchor_s (spread spread_s): (fit / (k·sd)² + anchor / spread²) / (1 / (k·sd)²
+// + 1 / spread²). fit_s unchanged when sd_factor is 0, fit_sd_s is not finite
+// or spread_s is not > 0; anchor_s when fit_sd_s is infinite.
+double CombineWithSpeech(double fit_s, double fit_sd_s, double anchor_s, double spread_s, double sd_factor);
 
 // Aligned decoding with kinematic target times. Times are seconds from the
 // take's first frame (frame f at f / rate_hz). Throws InvalidInput as

@@ -43,6 +43,11 @@ TEST(KeysOptionsCheck, RequiredOptionsAndReasons) {
   s.decode.min_key_ms = 80;
   s.decode.aligned_floor = 0;  // --aligned-floor 0
   EXPECT_EQ(s.Check(), "aligned_floor must be in (0, 1)");
+  s.decode.aligned_floor = 3e-3;
+  s.fit_sd_factor = -0.5;  // --fit-sd-factor -0.5
+  EXPECT_EQ(s.Check(), "--fit-sd-factor must be >= 0");
+  s.fit_sd_factor = 0;  // off
+  EXPECT_EQ(s.Check(), "");
 }
 
 TEST(KeysText, RendersTheScoreReport) {
@@ -130,6 +135,7 @@ TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
   EXPECT_EQ(sr["decoding"]["min_key_ms"], 80.0);
   EXPECT_EQ(sr["decoding"]["aligned_floor"], 3e-3);
   EXPECT_EQ(sr["decoding"]["anchor_nearest"], true);
+  EXPECT_EQ(sr["decoding"]["fit_sd_factor"], 4.0);
   EXPECT_EQ(sr["shape"]["count"].get<int64_t>(), expected);
   EXPECT_EQ(sr["sequence"]["free"]["keys_expected"].get<int64_t>(), expected);
   EXPECT_EQ(sr["sequence"]["aligned"]["keys_expected"].get<int64_t>(), expected);
@@ -149,16 +155,18 @@ TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
   EXPECT_GE(sr["shape"]["accuracy"].get<double>(), 0.6);
   EXPECT_GE(sr["placement"]["accuracy"].get<double>(), 0.6);
   {
-    // --aligned-floor 1e-6 --no-anchor-nearest --dry-run: reported, the same
+    // --aligned-floor 1e-6 --no-anchor-nearest --fit-sd-factor 0 --dry-run: reported, the same
     // keys aligned, and the frames' accuracies (not decoding) unchanged.
     KeysScoreOptions o = s;
     o.figures.clear();
     o.dry_run = true;
     o.decode.aligned_floor = 1e-6;
     o.anchor_nearest = false;
+    o.fit_sd_factor = 0;
     const json r2 = KeysScore(o, progress);
     EXPECT_EQ(r2["decoding"]["aligned_floor"], 1e-6);
     EXPECT_EQ(r2["decoding"]["anchor_nearest"], false);
+    EXPECT_EQ(r2["decoding"]["fit_sd_factor"], 0.0);
     EXPECT_EQ(r2["sequence"]["aligned"]["keys_expected"], sr["sequence"]["aligned"]["keys_expected"]);
     EXPECT_EQ(r2["shape"]["accuracy"], sr["shape"]["accuracy"]);
   }

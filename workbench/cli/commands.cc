@@ -578,6 +578,11 @@ class KeysCommand : public Command {
     score_->add_flag("!--no-anchor-nearest", score_options_.anchor_nearest,
                      "Speech anchors: do not replace a target that lies nearer a neighbouring key's A1 + lag than "
                      "its own (docs/analysis.md)");
+    score_
+        ->add_option("--fit-sd-factor", score_options_.fit_sd_factor,
+                     "Speech anchors: a kept fitted target is combined with its A1 + lag by inverse variance, the "
+                     "fit's standard error multiplied by this; 0 = fits kept (docs/analysis.md)")
+        ->capture_default_str();
     score_->add_flag("--dry-run", score_options_.dry_run, "Report only: write no tier nor scores");
     score_->add_option("--figures", score_options_.figures,
                        "Folder for the shape and placement confusion matrices (PNG), when takes have labels");

@@ -158,6 +158,7 @@ std::string KeysScoreOptions::Check() const {
   if (corpus.empty()) return "no corpus given";
   if (keys.empty()) return "--keys: no key model file";
   if (const std::string r = decode.Check(); !r.empty()) return r;
+  if (!(fit_sd_factor >= 0)) return "--fit-sd-factor must be >= 0";
   return "";
 }
 
@@ -289,7 +290,8 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
                  {"decoding",
                   {{"min_key_ms", options.decode.min_key_ms},
                    {"aligned_floor", options.decode.aligned_floor},
-                   {"anchor_nearest", options.anchor_nearest}}}};
+                   {"anchor_nearest", options.anchor_nearest},
+                   {"fit_sd_factor", options.fit_sd_factor}}}};
   Confusion shape(kNumShapes), placement(kNumPlacements);
   int free_correct = 0, free_expected = 0, free_ins = 0, free_del = 0, free_sub = 0;
   int aligned_correct = 0, aligned_expected = 0;
@@ -361,6 +363,7 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
       KeyTimingOptions timing;
       timing.decode = options.decode;
       timing.anchor_nearest = options.anchor_nearest;
+      timing.anchor_fit_sd_factor = options.fit_sd_factor;
       const std::vector<TimedKey> aligned = DecodeAlignedTimed(model, features, post, expected_keys, rate, timing);
       LabelTier aligned_tier = PointTier("keys_aligned", end_s);
       LabelTier aligned_places = PointTier("placement_aligned", end_s);

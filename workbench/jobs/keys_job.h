@@ -71,6 +71,10 @@ struct KeysScoreOptions {
   // Speech anchors: a changing target nearer a neighbouring key's A1 + lag
   // than its own is replaced too (KeyTimingOptions::anchor_nearest).
   bool anchor_nearest = true;
+  // A fitted target the anchors keep is combined with its A1 + lag, the fit's
+  // standard error multiplied by this (KeyTimingOptions::anchor_fit_sd_factor;
+  // 0 = fits kept as they are).
+  double fit_sd_factor = 4.0;
   bool dry_run = false;  // report only, write no tier nor scores
   std::string figures;   // folder for the confusion-matrix figures; "" = none
   std::string Check() const;
@@ -84,7 +88,7 @@ std::string KeysTrainText(const nlohmann::json& result);
 // {"corpus", "keys", "takes": [{"take", "frames", "decoded_keys", "tiers_written", "scores_written",
 //   "speech_anchors" (true when the phone tier's keys matched the labels), ...}],
 //  "shape": {"accuracy", "count", "confusion"}, "placement": {...},
-//  "decoding": {"min_key_ms", "aligned_floor", "anchor_nearest"} (the options used),
+//  "decoding": {"min_key_ms", "aligned_floor", "anchor_nearest", "fit_sd_factor"} (the options used),
 //  "sequence": {"free": {"keys_correct", "keys_expected", "insertions", "deletions", "substitutions"},
 //               "aligned": {"keys_correct", "keys_expected", "target_error_ms": {"mean", "sd"}}}}
 // (the scoring members only when some take has the label tier), "figures": [paths] when drawn.
