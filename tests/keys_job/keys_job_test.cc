@@ -73,6 +73,13 @@ TEST(KeysText, RendersTheScoreReport) {
             "shape accuracy 90.0 % of 10 labelled frames; placement 80.0 % of 10\n"
             "free decoding: 9 of 10 keys, 2 insertions, 0 deletions, 1 substitutions\n"
             "aligned decoding: 7 of 10 keys within 40 ms; target error 31.2 ms (sd 12.5)\n");
+  // With the decoding options the job reports (csw keys score --json).
+  json with = r;
+  with["decoding"] = {
+      {"min_key_ms", 80.0}, {"aligned_floor", 0.003}, {"anchor_nearest", false}, {"fit_sd_factor", 4.0}};
+  EXPECT_EQ(KeysScoreText(with).substr(KeysScoreText(r).size()),
+            "decoding options: shortest free key 80 ms, aligned floor 0.003, targets nearer a neighbour's A1 + lag "
+            "kept, fit sd factor 4\n");
 }
 
 // Six virtual-cuer sentences (no occlusions, so every feature is observed):

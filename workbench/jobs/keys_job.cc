@@ -481,6 +481,13 @@ std::string KeysScoreText(const json& r) {
     o << "aligned decoding: " << a["keys_correct"].get<int>() << " of " << a["keys_expected"].get<int>()
       << " keys within 40 ms; target error " << Fixed(a["target_error_ms"]["mean"].get<double>(), 1) << " ms (sd "
       << Fixed(a["target_error_ms"]["sd"].get<double>(), 1) << ")\n";
+    if (r.contains("decoding")) {
+      const json& d = r["decoding"];
+      o << "decoding options: shortest free key " << Fixed(d["min_key_ms"].get<double>(), 0) << " ms, aligned floor "
+        << d["aligned_floor"].get<double>() << ", targets nearer a neighbour's A1 + lag "
+        << (d["anchor_nearest"].get<bool>() ? "replaced" : "kept") << ", fit sd factor "
+        << d["fit_sd_factor"].get<double>() << "\n";
+    }
   }
   if (r.contains("figures"))
     for (const json& f : r["figures"]) o << "figure: " << f.get<std::string>() << "\n";
