@@ -37,6 +37,7 @@
 
 #include "analysis/keys/key_decoding.h"
 #include "analysis/keys/key_model.h"
+#include "analysis/keys/key_timing.h"
 #include "core/progress.h"
 
 namespace csw::jobs {
@@ -70,11 +71,11 @@ struct KeysScoreOptions {
   keys::DecodeOptions decode;
   // Speech anchors: a changing target nearer a neighbouring key's A1 + lag
   // than its own is replaced too (KeyTimingOptions::anchor_nearest).
-  bool anchor_nearest = true;
+  bool anchor_nearest = keys::KeyTimingOptions{}.anchor_nearest;
   // A fitted target the anchors keep is combined with its A1 + lag, the fit's
   // standard error multiplied by this (KeyTimingOptions::anchor_fit_sd_factor;
   // 0 = fits kept as they are).
-  double fit_sd_factor = 4.0;
+  double fit_sd_factor = keys::KeyTimingOptions{}.anchor_fit_sd_factor;
   bool dry_run = false;  // report only, write no tier nor scores
   std::string figures;   // folder for the confusion-matrix figures; "" = none
   std::string Check() const;
