@@ -166,6 +166,10 @@ struct Bounds {
     for (int k = 0; 2 * k < x.size(); ++k) {
       if (!active[static_cast<size_t>(k)]) continue;
       const auto ku = static_cast<size_t>(k);
+      // An onset from which no allowed duration reaches the target's range
+      // moves towards it (else the target would leave its range).
+      x[2 * k] = std::clamp(x[2 * k], std::min(min_target[ku] - hi[2 * k + 1], max_target[ku] - lo[2 * k + 1]),
+                            max_target[ku] - lo[2 * k + 1]);
       x[2 * k + 1] = std::min(x[2 * k + 1], max_target[ku] - x[2 * k]);
       x[2 * k + 1] = std::max(x[2 * k + 1], min_target[ku] - x[2 * k]);
       x[2 * k + 1] = std::clamp(x[2 * k + 1], lo[2 * k + 1], hi[2 * k + 1]);

@@ -294,6 +294,35 @@ TEST(PhasingMovement, CurvedPathWithTwoPathTerms) {
   EXPECT_LT(std::abs(mt), 5.0);
 }
 
+// Every fitted target stays within target_tolerance_s of its rough time, even
+// when the previous target lies far back and the stretch between holds a
+// small movement no gesture of the fit models: an onset from which no allowed
+// duration reaches the target's range is moved towards it. Before, the onset
+// could drift back to that small movement and take the target out of its
+// range (2 of these 16 cases, by 3 and 100 ms; on the virtual cuer, a final
+// return to rest whose refits then walked 900 ms away).
+TEST(PhasingMovement, TargetsStayWithinTheirToleranceAfterALongHold) {
+  for (const int terms : {1, 3})
+    for (const double small : {6.0, 15.0})
+      for (const double main_onset : {1.35, 1.55}) {
+        std::mt19937_64 rng(11);
+        const std::vector<Move> moves{{0.25, 0.45, Eigen::Vector3d(40.0, 0.0, 0.0)},
+                                      {0.95, 1.15, Eigen::Vector3d(0.0, 0.3 * small, small)},
+                                      {main_onset, 1.98, Eigen::Vector3d(0.0, 0.0, 40.0)}};
+        const Eigen::MatrixXd x = Sample(Eigen::Vector3d(0, 0, 0), moves, 120.0, 2.6, 0.2, rng);
+        SampledTrajectory tr{&x, 120.0, 0.0};
+        MovementFitOptions o;
+        o.path_terms = terms;
+        for (const double guess : {1.90, 1.95, 2.02, 2.06}) {
+          const MovementEstimate e = EstimateMovement(tr, 0.45, guess, 2.4, o);
+          ASSERT_TRUE(e.fitted) << e.reason;
+          EXPECT_LE(std::abs(e.target_s - guess), o.target_tolerance_s + 1e-9)
+              << "terms " << terms << " small " << small << " onset " << main_onset << " guess " << guess << ": "
+              << e.onset_s << "-" << e.target_s;
+        }
+      }
+}
+
 TEST(PhasingMovement, NoChangeIsLeftOut) {
   std::mt19937_64 rng(2);
   // Still between two real movements: the middle "movement" has no change.
