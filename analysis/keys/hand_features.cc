@@ -375,6 +375,7 @@ HandFeatures ComputeHandFeatures(const MarkerArray& markers, const MarkerBinding
   RigidSeries head;
   if (head_bound) head = EstimateRigidSeries(markers, head_cols, head_reference, options.head_fit, nullptr);
 
+  if (palm_rigid) out.tips_in_palm.setConstant(n, 3 * kNumFingers, kNaN);
   Eigen::Matrix3Xd palm_obs(3, static_cast<Eigen::Index>(palm_cols.size()));
   for (int64_t t = 0; t < n; ++t) {
     if (progress != nullptr && t % 4096 == 0) progress->Update("hand features", static_cast<double>(t) / n);
@@ -386,26 +387,33 @@ HandFeatures ComputeHandFeatures(const MarkerArray& markers, const MarkerBinding
       if (have_prox[f] && have_dist[f]) out.distances(t, f) = (dist[f] - prox[f]).norm();
     }
     if (have_dist[1] && have_dist[2]) out.distances(t, 5) = (dist[1] - dist[2]).norm();
+    // The palm's pose this frame (rigid fit of its visible markers).
+    RigidFit palm_fit;
+    if (palm_rigid) {
+      int visible = 0;
+      for (size_t i = 0; i < palm_cols.size(); ++i) {
+        const float* v = markers.at(t, palm_cols[i]);
+        if (std::isfinite(v[0])) {
+          palm_obs.col(static_cast<Eigen::Index>(i)) = Eigen::Vector3d(v[0], v[1], v[2]);
+          ++visible;
+        } else {
+          palm_obs.col(static_cast<Eigen::Index>(i)).setConstant(kNaN);
+        }
+      }
+      if (visible >= 3) palm_fit = EstimateRigidKabsch(palm_reference, palm_obs);
+      if (palm_fit.valid) {
+        const RigidTransform to_palm = palm_fit.transform.Inverse();
+        for (int f = 0; f < kNumFingers; ++f)
+          if (have_dist[f]) out.tips_in_palm.block<1, 3>(t, 3 * f) = to_palm.Apply(dist[f]).transpose();
+      }
+    }
     if (have_dist[0]) {
       Eigen::Vector3d centre;
       bool have_centre = false;
       if (palm_rigid) {
-        int visible = 0;
-        for (size_t i = 0; i < palm_cols.size(); ++i) {
-          const float* v = markers.at(t, palm_cols[i]);
-          if (std::isfinite(v[0])) {
-            palm_obs.col(static_cast<Eigen::Index>(i)) = Eigen::Vector3d(v[0], v[1], v[2]);
-            ++visible;
-          } else {
-            palm_obs.col(static_cast<Eigen::Index>(i)).setConstant(kNaN);
-          }
-        }
-        if (visible >= 3) {
-          const RigidFit fit = EstimateRigidKabsch(palm_reference, palm_obs);
-          if (fit.valid) {
-            centre = fit.transform.Apply(palm_centre_local);
-            have_centre = true;
-          }
+        if (palm_fit.valid) {
+          centre = palm_fit.transform.Apply(palm_centre_local);
+          have_centre = true;
         }
       } else {
         have_centre = Centroid(markers, binding, palm_point_markers, t, palm_point_markers.size(), &centre);

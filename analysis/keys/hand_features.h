@@ -87,6 +87,12 @@ struct HandFeatures {
   Eigen::MatrixXd distances;   // frames × 7 (mm); NaN where a marker is missing
   Eigen::MatrixXd index_tip;   // frames × 3, head frame (mm); NaN when missing
   Eigen::MatrixXd middle_tip;  // frames × 3, head frame (mm)
+  // Each finger's distal marker (thumb, index, middle, ring, little) in the
+  // palm's own frame (rigid fit of >= 3 palm markers): frames × 15 (mm), NaN
+  // where missing. Unlike the distances, these move at first order with every
+  // joint even at full extension, so movement fits time shapes on them
+  // (key_timing.h). Empty when the palm markers cannot be fitted rigidly.
+  Eigen::MatrixXd tips_in_palm;
   int64_t frames() const { return distances.rows(); }
 };
 

@@ -207,6 +207,7 @@ std::string KeyTimingOptions::Check() const {
   if (!(window_margin_s >= 0)) return "window_margin_s must be >= 0";
   if (max_refits < 0) return "max_refits must be >= 0";
   if (refinement_passes < 0) return "refinement_passes must be >= 0";
+  if (!(max_movement_s > 0)) return "max_movement_s must be > 0";
   if (!(anchor_outlier_sd > 0)) return "anchor_outlier_sd must be > 0";
   if (!(anchor_outlier_floor_s >= 0)) return "anchor_outlier_floor_s must be >= 0";
   if (anchor_min_keys < 1) return "anchor_min_keys must be >= 1";
@@ -231,7 +232,8 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
 
   // Times one component: its changes, aligned segments, rough and kinematic targets.
   auto time_component = [&](bool shape, const Eigen::MatrixXd& post, const Eigen::MatrixXd& x,
-                            const GaussianClassifier& classifier, const phasing::MovementFitOptions& fit) {
+                            const Eigen::MatrixXd& kin, const GaussianClassifier& classifier,
+                            const phasing::MovementFitOptions& fit) {
     const std::vector<size_t> changes = Changes(expected, shape);
     std::vector<int> labels;
     for (size_t k : changes) labels.push_back(shape ? expected[k].shape : expected[k].placement);
@@ -257,7 +259,7 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
       c.onset_s = kNaN;
     }
     if (options.kinematic) {
-      const phasing::SampledTrajectory traj{&x, rate_hz, 0.0};
+      const phasing::SampledTrajectory traj{&kin, rate_hz, 0.0};
       // Pass 0 fits each movement around the rough targets; the refinement
       // passes refit it with its neighbours' times taken from their fits.
       std::vector<double> times(changes.size());
@@ -273,7 +275,7 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
           phasing::MovementEstimate m;
           for (int refit = 0; refit < options.max_refits + 1; ++refit) {
             if (!(previous < guess && guess < next)) break;
-            m = phasing::EstimateMovement(traj, previous, guess, next, fit);
+            m = phasing::EstimateMovement(traj, std::max(previous, guess - options.max_movement_s), guess, next, fit);
             if (!m.Usable() || std::abs(m.target_s - guess) < 0.9 * fit.target_tolerance_s) break;
             guess = m.target_s;
           }
@@ -306,7 +308,9 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
       (shape ? out[k].shape : out[k].placement) = c;
     }
   };
-  time_component(true, posteriors.shape, features.distances, model.shape, options.shape_fit);
+  const bool tips = options.shape_on_tips && features.tips_in_palm.rows() == n;
+  time_component(true, posteriors.shape, features.distances, tips ? features.tips_in_palm : features.distances,
+                 model.shape, options.shape_fit);
 
   // The placement point: the tip of the longest extended finger, blended
   // between the index (weight 1 for the model's index shapes) and the middle
@@ -341,10 +345,12 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
     else
       tip.row(t) = w * features.index_tip.row(t) + (1.0 - w) * features.middle_tip.row(t);
   }
-  time_component(false, model.placement.Posteriors(tip), tip, model.placement, options.placement_fit);
+  time_component(false, model.placement.Posteriors(tip), tip, tip, model.placement, options.placement_fit);
 
   if (!out.empty()) {
-    // The initial hold: left at the earliest fitted onset of the next movements.
+    // The initial hold: left at the earliest fitted onset of the next movements,
+    // not before the take's first frame (an onset fitted before the data is an
+    // extrapolation).
     TimedKey& first = out.front();
     double leave = kInf;
     for (size_t k = 1; k < out.size(); ++k) {
@@ -357,7 +363,7 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
       if (out[k].placement.changes && out[k].placement.kinematic) leave_p = out[k].placement.onset_s;
       if (out[k].placement.changes) break;
     }
-    leave = std::min(leave, leave_p);
+    leave = std::max(0.0, std::min(leave, leave_p));
     if (first.shape.segment_start == 0 && first.placement.segment_start == 0 && std::isfinite(leave)) {
       first.shape.target_s = first.placement.target_s = leave;
       for (size_t k = 1; k < out.size() && !out[k].shape.changes; ++k) out[k].shape.target_s = leave;

@@ -17,15 +17,25 @@
 //    middle finger otherwise).
 // 3. Kinematic target: the movement into the target is fitted by superposed
 //    minimum-jerk gestures (phasing::EstimateMovement, three gestures: into the
-//    previous target, this one and the next) around the rough targets: the
-//    seven distances with curved paths for the shape, the key's finger tip in
-//    the head frame for the placement. When the fit says the component moved,
-//    its fitted onset and target replace the rough time.
+//    previous target, this one and the next) around the rough targets: for the
+//    shape the five distal finger markers in the palm's frame
+//    (HandFeatures::tips_in_palm, curved paths; the seven distances when the
+//    palm cannot be fitted or shape_on_tips is off), the key's finger tip in
+//    the head frame for the placement. A distance changes at second order
+//    near full extension (it is flat in the joint angles there), so a fit on
+//    the distances hardly sees a finger start to bend or finish stretching;
+//    the tips move at first order with every joint (virtual cuer, 236 keys:
+//    mean aligned error 27.0 -> 22.1 ms on model-filled takes,
+//    docs/analysis.md). The fit window reaches back at most max_movement_s
+//    before the rough target: a longer stretch since the previous change
+//    holds the small re-realisations of held keys, which the three-gesture
+//    fit does not model and would stretch a gesture over. When the fit says
+//    the component moved, its fitted onset and target replace the rough time.
 //
 // A key held from the take's first frame (the initial rest) has no movement
 // into it: its target is the instant the hand leaves it, the earliest fitted
-// onset of its components' next movements (the rough time when none is
-// fitted). A key's target (target_frame, target_s) is its shape target when the
+// onset of its components' next movements, not before the first frame (the
+// rough time when none is fitted). A key's target (target_frame, target_s) is its shape target when the
 // shape changes, else its placement target — the convention of the `keys`
 // label tier (targets at the shape targets, placement targets in a tier of
 // their own). A key where neither changes (a repeated code) shows no movement
@@ -76,6 +86,8 @@ struct KeyTimingOptions {
   double arrival_tolerance = 0.05;       // rough target: fraction of the segment's distance range
   double window_margin_s = 0.1;          // component segments: how far outside their keys' joint segments
   bool kinematic = true;                 // false: rough targets only
+  bool shape_on_tips = true;             // shape movements fitted on HandFeatures::tips_in_palm when known
+  double max_movement_s = 0.8;           // fit window: at most this far back before the rough target
   int max_refits = 3;                    // refits around a fitted target that hit its tolerance
   int refinement_passes = 0;             // refits with the neighbours' fitted targets
   bool interpolate_repeats = true;       // repeated keys: target interpolated between their neighbours'

@@ -49,5 +49,14 @@ TEST(KeyTimingOptions, ANegativeFitSdFactorIsRefused) {
   EXPECT_NE(o.Check(), "");
 }
 
+TEST(KeyTimingOptions, ANonPositiveMovementWindowIsRefused) {
+  KeyTimingOptions o;
+  EXPECT_DOUBLE_EQ(o.max_movement_s, 0.8);
+  o.max_movement_s = 0.0;
+  EXPECT_NE(o.Check().find("max_movement_s"), std::string::npos);
+  o.max_movement_s = kNaN;
+  EXPECT_NE(o.Check().find("max_movement_s"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace csw::keys
