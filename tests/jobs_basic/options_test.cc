@@ -2,6 +2,7 @@
 // its exact reason (these become the CLI's usage errors, exit code 1).
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 
 #include "datasets/virtual_cuer.h"
@@ -33,6 +34,30 @@ TEST(ImportOptionsCheck, RejectsEachBadRequestWithItsReason) {
   EXPECT_EQ(o.Check(), "import: other.h5: unsupported file type (expected .c3d, .trc, .bvh, .TextGrid, .eaf or .wav)");
   o.files = {"notes.txt"};
   EXPECT_EQ(o.Check(), "import: notes.txt: unsupported file type (expected .c3d, .trc, .bvh, .TextGrid, .eaf or .wav)");
+  o.files = {"a.c3d", "lab/Markers.JSON"};
+  EXPECT_EQ(o.Check(),
+            "import: lab/Markers.JSON: unsupported file type (expected .c3d, .trc, .bvh, .TextGrid, .eaf or .wav); a "
+            "marker set is given with --markerset lab/Markers.JSON");
+}
+
+// A folder's files given with a wildcard include its marker set: when it is
+// also the --markerset file (same path or the same file by another path), it
+// is not a take.
+TEST(ImportOptionsCheck, TheMarkerSetAmongTheFilesIsLeftOut) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "csw_import_markerset_check";
+  std::filesystem::create_directories(dir);
+  const std::string set = (dir / "markerset.json").string();
+  std::ofstream(set) << "{}";
+  ImportOptions o;
+  o.corpus = "c.h5";
+  o.markerset = set;
+  o.files = {"a.c3d", set};
+  EXPECT_EQ(o.Check(), "");
+  o.files = {"a.c3d", (dir / "." / "markerset.json").string()};
+  EXPECT_EQ(o.Check(), "");
+  o.files = {"a.c3d", (dir / "other.json").string()};
+  EXPECT_NE(o.Check().find("unsupported file type"), std::string::npos);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(ImportOptionsCheck, UnitsAreOneOfFiveAndOnlyForBvhFiles) {

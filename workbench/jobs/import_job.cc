@@ -1,6 +1,7 @@
 #include "workbench/jobs/import_job.h"
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -24,13 +25,32 @@ namespace csw::jobs {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// `f` is the --markerset file itself (a folder's files given with a wildcard
+// include its markerset.json): left out of the takes.
+bool IsTheMarkerSet(const std::string& f, const std::string& markerset) {
+  if (markerset.empty()) return false;
+  if (f == markerset) return true;
+  std::error_code ec;
+  return fs::equivalent(f, markerset, ec) && !ec;
+}
+
+}  // namespace
+
 std::string ImportOptions::Check() const {
   if (files.empty()) return "import: no input files";
   if (corpus.empty()) return "import: no output corpus (-o)";
   if (chunk_frames < 1) return "import: chunk_frames must be positive";
   for (const auto& f : files) {
-    if (FormatOf(f).empty() || FormatOf(f) == "hdf5")
-      return "import: " + f + ": unsupported file type (expected .c3d, .trc, .bvh, .TextGrid, .eaf or .wav)";
+    if (IsTheMarkerSet(f, markerset)) continue;
+    if (FormatOf(f).empty() || FormatOf(f) == "hdf5") {
+      std::string why = "import: " + f + ": unsupported file type (expected .c3d, .trc, .bvh, .TextGrid, .eaf or .wav)";
+      std::string ext = fs::path(f).extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+      if (ext == ".json") why += "; a marker set is given with --markerset " + f;
+      return why;
+    }
   }
   if (!units.empty()) {
     if (!IsBvhUnit(units)) return "import: --units must be mm, cm, dm, m or in, not '" + units + "'";
@@ -58,6 +78,7 @@ ImportResult Import(const ImportOptions& options, Progress& progress) {
   std::map<std::string, TakeFiles> takes;
   std::vector<std::string> order;
   for (const auto& f : options.files) {
+    if (IsTheMarkerSet(f, options.markerset)) continue;
     std::string stem = fs::path(f).stem().string();
     std::string fmt = FormatOf(f);
     if (!takes.count(stem)) order.push_back(stem);
