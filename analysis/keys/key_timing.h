@@ -35,8 +35,8 @@
 // A key held from the take's first frame (the initial rest) has no movement
 // into it: its target is the instant the hand leaves it, the earliest fitted
 // onset of its components' next movements, not before the first frame (the
-// rough time when none is fitted). A key's target (target_frame, target_s) is its shape target when the
-// shape changes, else its placement target — the convention of the `keys`
+// rough time when none is fitted). A key's target (target_frame, target_s) is
+// its shape target when the shape changes, else its placement target — the convention of the `keys`
 // label tier (targets at the shape targets, placement targets in a tier of
 // their own). A key where neither changes (a repeated code) shows no movement
 // and no posterior change: its target is interpolated by key index between the

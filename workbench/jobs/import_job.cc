@@ -1,7 +1,6 @@
 #include "workbench/jobs/import_job.h"
 
 #include <algorithm>
-#include <cctype>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -46,9 +45,7 @@ std::string ImportOptions::Check() const {
     if (IsTheMarkerSet(f, markerset)) continue;
     if (FormatOf(f).empty() || FormatOf(f) == "hdf5") {
       std::string why = "import: " + f + ": unsupported file type (expected .c3d, .trc, .bvh, .TextGrid, .eaf or .wav)";
-      std::string ext = fs::path(f).extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-      if (ext == ".json") why += "; a marker set is given with --markerset " + f;
+      if (LowerExtension(f) == ".json") why += "; a marker set is given with --markerset " + f;
       return why;
     }
   }

@@ -8,9 +8,14 @@
 
 namespace csw::jobs {
 
-std::string FormatOf(const std::string& path) {
+std::string LowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+std::string FormatOf(const std::string& path) {
+  const std::string ext = LowerExtension(path);
   if (ext == ".c3d") return "c3d";
   if (ext == ".trc") return "trc";
   if (ext == ".bvh") return "bvh";

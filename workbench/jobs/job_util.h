@@ -19,6 +19,8 @@ class UsageError : public InvalidInput {
 // "hdf5" (.h5/.hdf5: a corpus or a model file, told apart by its root "format"
 // attribute), or "" when unknown.
 std::string FormatOf(const std::string& path);
+// The path's extension with its dot, in lower case (".json"); "" without one.
+std::string LowerExtension(const std::string& path);
 
 // Sentences of a text file (csw simulate --sentences, csw say --text-file):
 // one per line; a trailing CR, blank lines and lines starting with '#' are
