@@ -115,7 +115,8 @@ Lag MedianSpread(std::vector<double> v) {
 // Speech anchors (key_timing.h): outlying component targets and repeated keys
 // timed from A1 + the take's own lag.
 void AnchorToSpeech(std::vector<TimedKey>& keys, const std::vector<ExpectedKey>& expected,
-                    const KeyTimingOptions& options) {
+                    const KeyTimingOptions& options, const Eigen::MatrixXd& shape_post,
+                    const Eigen::MatrixXd& place_post, double rate_hz) {
   const size_t n = std::min(keys.size(), expected.size());
   for (const bool shape : {true, false}) {
     auto timing = [&](size_t k) -> ComponentTiming& { return shape ? keys[k].shape : keys[k].placement; };
@@ -155,8 +156,20 @@ void AnchorToSpeech(std::vector<TimedKey>& keys, const std::vector<ExpectedKey>&
               break;
             }
         }
-        if (!nearer_neighbour && std::abs(c.target_s - at) <=
-                                     std::max(options.anchor_outlier_sd * lag.spread, options.anchor_outlier_floor_s)) {
+        // Within the gate, or a fitted target where the hand holds the key's
+        // own class, not too far from A1 + lag (the gate assumes a steady
+        // lag; a cuer's lag can stray beyond it on one key).
+        bool in_class = false;
+        if (options.anchor_keep_in_class && c.kinematic && std::abs(c.target_s - at) <= options.anchor_in_class_max_s) {
+          const Eigen::MatrixXd& post = shape ? shape_post : place_post;
+          const int label = shape ? expected[k].shape : expected[k].placement;
+          const auto f = std::clamp<int64_t>(std::llround(c.target_s * rate_hz), 0, post.rows() - 1);
+          in_class = post.rows() > 0 && label >= 0 && label < post.cols() && std::isfinite(post(f, label)) &&
+                     post(f, label) >= options.anchor_in_class_posterior;
+        }
+        const bool within_gate = std::abs(c.target_s - at) <=
+                                 std::max(options.anchor_outlier_sd * lag.spread, options.anchor_outlier_floor_s);
+        if (!nearer_neighbour && (within_gate || in_class)) {
           if (!c.kinematic || !std::isfinite(c.target_sd_s) || !(options.anchor_fit_sd_factor > 0) || !(lag.spread > 0))
             continue;
           c.target_s = CombineWithSpeech(c.target_s, c.target_sd_s, at, lag.spread, options.anchor_fit_sd_factor);
@@ -212,6 +225,9 @@ std::string KeyTimingOptions::Check() const {
   if (!(anchor_outlier_floor_s >= 0)) return "anchor_outlier_floor_s must be >= 0";
   if (anchor_min_keys < 1) return "anchor_min_keys must be >= 1";
   if (!(anchor_fit_sd_factor >= 0)) return "anchor_fit_sd_factor must be >= 0";
+  if (!(anchor_in_class_posterior > 0 && anchor_in_class_posterior <= 1))
+    return "anchor_in_class_posterior must be in (0, 1]";
+  if (!(anchor_in_class_max_s >= 0)) return "anchor_in_class_max_s must be >= 0";
   return "";
 }
 
@@ -345,7 +361,8 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
     else
       tip.row(t) = w * features.index_tip.row(t) + (1.0 - w) * features.middle_tip.row(t);
   }
-  time_component(false, model.placement.Posteriors(tip), tip, tip, model.placement, options.placement_fit);
+  const Eigen::MatrixXd placement_post = model.placement.Posteriors(tip);
+  time_component(false, placement_post, tip, tip, model.placement, options.placement_fit);
 
   if (!out.empty()) {
     // The initial hold: left at the earliest fitted onset of the next movements,
@@ -371,7 +388,7 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
     }
   }
   auto frame = [&](double s) { return std::clamp<int64_t>(std::llround(s * rate_hz), 0, n - 1); };
-  if (options.speech_anchors) AnchorToSpeech(out, expected, options);
+  if (options.speech_anchors) AnchorToSpeech(out, expected, options, posteriors.shape, placement_post, rate_hz);
   for (TimedKey& t : out)
     if (!t.target_from_speech)
       t.target_s = t.shape.changes       ? t.shape.target_s

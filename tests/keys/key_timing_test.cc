@@ -58,5 +58,20 @@ TEST(KeyTimingOptions, ANonPositiveMovementWindowIsRefused) {
   EXPECT_NE(o.Check().find("max_movement_s"), std::string::npos);
 }
 
+TEST(KeyTimingOptions, InClassKeepingNeedsAPosteriorInZeroOneAndANonNegativeReach) {
+  KeyTimingOptions o;
+  EXPECT_EQ(o.Check(), "");
+  o.anchor_in_class_posterior = 0.0;
+  EXPECT_NE(o.Check().find("anchor_in_class_posterior"), std::string::npos);
+  o.anchor_in_class_posterior = 1.5;
+  EXPECT_NE(o.Check().find("anchor_in_class_posterior"), std::string::npos);
+  o.anchor_in_class_posterior = 1.0;
+  EXPECT_EQ(o.Check(), "");
+  o.anchor_in_class_max_s = -0.1;
+  EXPECT_NE(o.Check().find("anchor_in_class_max_s"), std::string::npos);
+  o.anchor_in_class_max_s = kNaN;
+  EXPECT_NE(o.Check().find("anchor_in_class_max_s"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace csw::keys

@@ -419,7 +419,10 @@ Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const H
                   << timed[k].placement.target_s * rate << (place_changes ? "" : " (held)") << " key "
                   << timed[k].target_s * rate << " err " << err << " cat " << (shape_changes ? "S" : "-")
                   << (place_changes ? "P" : "-")
-                  << (shape_approached[k] || placement_approached[k] ? " approached" : " reached") << "\n";
+                  << (shape_approached[k] || placement_approached[k] ? " approached" : " reached") << " unanchored "
+                  << unanchored[k].shape.target_s * rate << "/" << unanchored[k].placement.target_s * rate << " err "
+                  << key_error(unanchored[k]) << (timed[k].shape.from_speech ? " S<-A1" : "")
+                  << (timed[k].placement.from_speech ? " P<-A1" : "") << "\n";
       if (err <= 40.0) ++tally.aligned_correct;
       {
         // On its own gesture: each changing component's target is nearer its
@@ -641,20 +644,25 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
   // 161/163), worst 169 -> 157 ms; clean 25.5 -> 20.9 ms (reached 16.1,
   // 143/163), worst 126 -> 124; spline/DCT-filled 28.8 -> 30.5 ms, worst 144
   // -> 167 (its fingertips are missing longest).
+  // A fitted target beyond the speech anchors' gate kept when the hand holds
+  // the key's own class there, within 0.2 s of A1 + lag (anchor_keep_in_class,
+  // 2026-12-05): model-filled 22.1 -> 21.4 ms (reached 18.0 -> 17.1, 140 ->
+  // 143/163 within 40 ms); clean 20.9 -> 20.0 ms (reached 15.0, 145/163);
+  // spline/DCT-filled 30.5 -> 29.1 ms, worst 167 -> 131.
   // The floors below guard those numbers against regressions; the reached
   // keys' mean is held under the 25 ms.
-  EXPECT_GE(model.aligned_rate, 0.79);
+  EXPECT_GE(model.aligned_rate, 0.81);                                                                // 196/236 = 0.831
   EXPECT_GE(static_cast<double>(model.free_reached_matches) / model.free_reached, 0.92);              // 153/163 = 0.939
-  EXPECT_LE(Mean(model.aligned_error_ms), 24.0);                                                      // 22.1 ms
-  EXPECT_LE(Mean(model.aligned_error_reached_ms), 20.0);                                              // 18.0 ms
-  EXPECT_LE(Mean(model.aligned_error_ms), Mean(model.unanchored_error_ms) - 3.0);                     // 22.1 vs 28.0 ms
+  EXPECT_LE(Mean(model.aligned_error_ms), 23.0);                                                      // 21.4 ms
+  EXPECT_LE(Mean(model.aligned_error_reached_ms), 18.0);                                              // 17.1 ms
+  EXPECT_LE(Mean(model.aligned_error_ms), Mean(model.unanchored_error_ms) - 4.0);                     // 21.4 vs 28.0 ms
   EXPECT_LE(*std::max_element(model.aligned_error_ms.begin(), model.aligned_error_ms.end()), 175.0);  // 157 ms
   EXPECT_GE(static_cast<double>(model.aligned_own_reached) / model.aligned_reached, 0.97);            // 161/163 = 0.988
   EXPECT_GE(static_cast<double>(model.aligned_own) / model.aligned_keys, 0.95);                       // 229/236 = 0.970
   EXPECT_GE(model.speech_timed_repeats, 5);               // the held-out takes' 8 repeated keys
-  EXPECT_GE(clean.aligned_rate, 0.80);                    // 194/236 = 0.822
-  EXPECT_LE(Mean(clean.aligned_error_ms), 23.0);          // 20.9 ms
-  EXPECT_LE(Mean(clean.aligned_error_reached_ms), 18.5);  // 16.1 ms
+  EXPECT_GE(clean.aligned_rate, 0.81);                    // 196/236 = 0.831
+  EXPECT_LE(Mean(clean.aligned_error_ms), 22.0);          // 20.0 ms
+  EXPECT_LE(Mean(clean.aligned_error_reached_ms), 16.0);  // 15.0 ms
   EXPECT_LE(*std::max_element(clean.aligned_error_ms.begin(), clean.aligned_error_ms.end()), 140.0);  // 124 ms
   EXPECT_GE(filled.aligned_rate, 0.67);
   EXPECT_GE(model.shape_reached.Accuracy(), 0.99);
@@ -672,9 +680,9 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
   EXPECT_GE(filled.free_rate, 0.78);
   // 30.5 ms (35.2 before the aligned floor, 33.2 before anchor_nearest, 29.2
   // before the fits were combined with the speech, 28.8 before the shape fits
-  // on the fingertips)
-  EXPECT_LE(Mean(filled.aligned_error_ms), 32.5);
-  EXPECT_LE(*std::max_element(filled.aligned_error_ms.begin(), filled.aligned_error_ms.end()), 185.0);  // 167 ms (290)
+  // on the fingertips, 29.1 since anchor_keep_in_class)
+  EXPECT_LE(Mean(filled.aligned_error_ms), 31.0);
+  EXPECT_LE(*std::max_element(filled.aligned_error_ms.begin(), filled.aligned_error_ms.end()), 150.0);  // 131 ms (290)
 }
 
 // Another lab: the virtual cuer's second layout (other marker names and
@@ -748,14 +756,16 @@ TEST(VirtualCuerKeys, OtherLabLayoutAndShiftedTiming) {
   // 195 -> 166 ms. With the shape fits on the fingertips in the palm frame
   // (2026-12-05): clean 23.7 -> 19.2 ms (reached 16.5 -> 11.8, 85/90 within
   // 40 ms), worst 117 -> 130; filled 29.6 -> 22.6 ms, worst 166 -> 167. The
-  // anchors now gain less on clean markers (24.8 ms without them).
+  // anchors now gain less on clean markers (24.8 ms without them). With
+  // anchor_keep_in_class (2026-12-05): clean 19.2 -> 18.0 ms (86/90), worst
+  // 130 (unchanged); filled 22.6 -> 22.3 ms.
   EXPECT_GE(clean.shape_reached.Accuracy(), 0.97);
   EXPECT_GE(clean.placement_reached.Accuracy(), 0.95);
   EXPECT_GE(static_cast<double>(clean.free_reached_matches) / clean.free_reached, 0.90);
-  EXPECT_GE(clean.aligned_rate, 0.83);                                             // 115/134 = 0.858
-  EXPECT_LE(Mean(clean.aligned_error_ms), 21.0);                                   // 19.2 ms
-  EXPECT_LE(Mean(clean.aligned_error_ms), Mean(clean.unanchored_error_ms) - 4.0);  // 19.2 vs 24.8 ms
-  EXPECT_LE(Mean(filled.aligned_error_ms), 25.0);                                  // 22.6 ms
+  EXPECT_GE(clean.aligned_rate, 0.85);                                             // 117/134 = 0.873
+  EXPECT_LE(Mean(clean.aligned_error_ms), 20.0);                                   // 18.0 ms
+  EXPECT_LE(Mean(clean.aligned_error_ms), Mean(clean.unanchored_error_ms) - 5.0);  // 18.0 vs 24.8 ms
+  EXPECT_LE(Mean(filled.aligned_error_ms), 24.0);                                  // 22.3 ms
   EXPECT_LE(*std::max_element(filled.aligned_error_ms.begin(), filled.aligned_error_ms.end()), 185.0);  // 167 ms
   EXPECT_GE(filled.shape.Accuracy(), 0.62);
   EXPECT_GE(filled.placement.Accuracy(), 0.72);

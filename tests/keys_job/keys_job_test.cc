@@ -80,6 +80,10 @@ TEST(KeysText, RendersTheScoreReport) {
   EXPECT_EQ(KeysScoreText(with).substr(KeysScoreText(r).size()),
             "decoding options: shortest free key 80 ms, aligned floor 0.003, targets nearer a neighbour's A1 + lag "
             "kept, fit sd factor 4\n");
+  with["decoding"]["keep_in_class"] = false;
+  EXPECT_EQ(KeysScoreText(with).substr(KeysScoreText(r).size()),
+            "decoding options: shortest free key 80 ms, aligned floor 0.003, targets nearer a neighbour's A1 + lag "
+            "kept, fit sd factor 4, fits in the key's class not kept\n");
 }
 
 // Six virtual-cuer sentences (no occlusions, so every feature is observed):
@@ -143,6 +147,7 @@ TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
   EXPECT_EQ(sr["decoding"]["aligned_floor"], 3e-3);
   EXPECT_EQ(sr["decoding"]["anchor_nearest"], true);
   EXPECT_EQ(sr["decoding"]["fit_sd_factor"], 4.0);
+  EXPECT_EQ(sr["decoding"]["keep_in_class"], true);
   EXPECT_EQ(sr["shape"]["count"].get<int64_t>(), expected);
   EXPECT_EQ(sr["sequence"]["free"]["keys_expected"].get<int64_t>(), expected);
   EXPECT_EQ(sr["sequence"]["aligned"]["keys_expected"].get<int64_t>(), expected);
@@ -170,10 +175,12 @@ TEST(KeysJob, TrainsScoresAndWritesTheDecodedTiers) {
     o.decode.aligned_floor = 1e-6;
     o.anchor_nearest = false;
     o.fit_sd_factor = 0;
+    o.keep_in_class = false;
     const json r2 = KeysScore(o, progress);
     EXPECT_EQ(r2["decoding"]["aligned_floor"], 1e-6);
     EXPECT_EQ(r2["decoding"]["anchor_nearest"], false);
     EXPECT_EQ(r2["decoding"]["fit_sd_factor"], 0.0);
+    EXPECT_EQ(r2["decoding"]["keep_in_class"], false);
     EXPECT_EQ(r2["sequence"]["aligned"]["keys_expected"], sr["sequence"]["aligned"]["keys_expected"]);
     EXPECT_EQ(r2["shape"]["accuracy"], sr["shape"]["accuracy"]);
   }

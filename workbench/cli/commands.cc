@@ -583,6 +583,9 @@ class KeysCommand : public Command {
                      "Speech anchors: a kept fitted target is combined with its A1 + lag by inverse variance, the "
                      "fit's standard error multiplied by this; 0 = fits kept (docs/analysis.md)")
         ->capture_default_str();
+    score_->add_flag("!--no-keep-in-class", score_options_.keep_in_class,
+                     "Speech anchors: replace a fitted target beyond the gate even where the hand holds the key's "
+                     "own class (docs/analysis.md)");
     score_->add_flag("--dry-run", score_options_.dry_run, "Report only: write no tier nor scores");
     score_->add_option("--figures", score_options_.figures,
                        "Folder for the shape and placement confusion matrices (PNG), when takes have labels");

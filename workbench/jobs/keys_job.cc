@@ -291,7 +291,8 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
                   {{"min_key_ms", options.decode.min_key_ms},
                    {"aligned_floor", options.decode.aligned_floor},
                    {"anchor_nearest", options.anchor_nearest},
-                   {"fit_sd_factor", options.fit_sd_factor}}}};
+                   {"fit_sd_factor", options.fit_sd_factor},
+                   {"keep_in_class", options.keep_in_class}}}};
   Confusion shape(kNumShapes), placement(kNumPlacements);
   int free_correct = 0, free_expected = 0, free_ins = 0, free_del = 0, free_sub = 0;
   int aligned_correct = 0, aligned_expected = 0;
@@ -364,6 +365,7 @@ json KeysScore(const KeysScoreOptions& options, Progress& progress) {
       timing.decode = options.decode;
       timing.anchor_nearest = options.anchor_nearest;
       timing.anchor_fit_sd_factor = options.fit_sd_factor;
+      timing.anchor_keep_in_class = options.keep_in_class;
       const std::vector<TimedKey> aligned = DecodeAlignedTimed(model, features, post, expected_keys, rate, timing);
       LabelTier aligned_tier = PointTier("keys_aligned", end_s);
       LabelTier aligned_places = PointTier("placement_aligned", end_s);
@@ -486,7 +488,10 @@ std::string KeysScoreText(const json& r) {
       o << "decoding options: shortest free key " << Fixed(d["min_key_ms"].get<double>(), 0) << " ms, aligned floor "
         << d["aligned_floor"].get<double>() << ", targets nearer a neighbour's A1 + lag "
         << (d["anchor_nearest"].get<bool>() ? "replaced" : "kept") << ", fit sd factor "
-        << d["fit_sd_factor"].get<double>() << "\n";
+        << d["fit_sd_factor"].get<double>();
+      if (d.contains("keep_in_class"))
+        o << ", fits in the key's class " << (d["keep_in_class"].get<bool>() ? "kept" : "not kept");
+      o << "\n";
     }
   }
   if (r.contains("figures"))

@@ -76,6 +76,9 @@ struct KeysScoreOptions {
   // standard error multiplied by this (KeyTimingOptions::anchor_fit_sd_factor;
   // 0 = fits kept as they are).
   double fit_sd_factor = keys::KeyTimingOptions{}.anchor_fit_sd_factor;
+  // A fitted target beyond the anchors' gate is kept where the hand holds the
+  // key's own class (KeyTimingOptions::anchor_keep_in_class).
+  bool keep_in_class = keys::KeyTimingOptions{}.anchor_keep_in_class;
   bool dry_run = false;  // report only, write no tier nor scores
   std::string figures;   // folder for the confusion-matrix figures; "" = none
   std::string Check() const;
@@ -89,7 +92,8 @@ std::string KeysTrainText(const nlohmann::json& result);
 // {"corpus", "keys", "takes": [{"take", "frames", "decoded_keys", "tiers_written", "scores_written",
 //   "speech_anchors" (true when the phone tier's keys matched the labels), ...}],
 //  "shape": {"accuracy", "count", "confusion"}, "placement": {...},
-//  "decoding": {"min_key_ms", "aligned_floor", "anchor_nearest", "fit_sd_factor"} (the options used),
+//  "decoding": {"min_key_ms", "aligned_floor", "anchor_nearest", "fit_sd_factor", "keep_in_class"}
+//    (the options used),
 //  "sequence": {"free": {"keys_correct", "keys_expected", "insertions", "deletions", "substitutions"},
 //               "aligned": {"keys_correct", "keys_expected", "target_error_ms": {"mean", "sd"}}}}
 // (the scoring members only when some take has the label tier), "figures": [paths] when drawn.
