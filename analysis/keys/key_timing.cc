@@ -291,7 +291,11 @@ std::vector<TimedKey> DecodeAlignedTimed(const KeyModel& model, const HandFeatur
           phasing::MovementEstimate m;
           for (int refit = 0; refit < options.max_refits + 1; ++refit) {
             if (!(previous < guess && guess < next)) break;
-            m = phasing::EstimateMovement(traj, std::max(previous, guess - options.max_movement_s), guess, next, fit);
+            const double first = std::max(previous, guess - options.max_movement_s);
+            if (i + 1 < changes.size())
+              m = phasing::EstimateMovement(traj, first, guess, next, fit);
+            else  // the component's last movement: no movement follows, the data run into the hold
+              m = phasing::EstimateMovementAmong(traj, {first, guess}, 1, first - fit.lookback_s, next, fit);
             if (!m.Usable() || std::abs(m.target_s - guess) < 0.9 * fit.target_tolerance_s) break;
             guess = m.target_s;
           }

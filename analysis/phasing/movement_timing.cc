@@ -551,6 +551,25 @@ MovementEstimate EstimateMovement(const SampledTrajectory& tr, double previous_t
   return FitWindow(tr, w, o);
 }
 
+MovementEstimate EstimateMovementAmong(const SampledTrajectory& tr, const std::vector<double>& rough_targets_s,
+                                       size_t central, double data_start_s, double data_end_s,
+                                       const MovementFitOptions& o) {
+  CheckTrajectory(tr);
+  CheckTimes(o);
+  if (rough_targets_s.size() < 2 || central < 1 || central >= rough_targets_s.size())
+    throw InvalidInput("movement timing: the measured gesture needs a gesture before it");
+  for (size_t i = 1; i < rough_targets_s.size(); ++i)
+    if (!(rough_targets_s[i] > rough_targets_s[i - 1]))
+      throw InvalidInput("movement timing: the target times must increase");
+  if (!(data_start_s < data_end_s)) throw InvalidInput("movement timing: the data window is empty");
+  Window w;
+  w.rough = rough_targets_s;
+  w.central = static_cast<int>(central);
+  w.data_start = data_start_s;
+  w.data_end = data_end_s;
+  return FitWindow(tr, w, o);
+}
+
 std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& tr, const std::vector<double>& targets,
                                                 const MovementFitOptions& o) {
   CheckTrajectory(tr);

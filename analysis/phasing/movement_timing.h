@@ -104,6 +104,17 @@ struct MovementEstimate {
 MovementEstimate EstimateMovement(const SampledTrajectory& trajectory, double previous_target_s, double target_s,
                                   double next_target_s, const MovementFitOptions& options = {});
 
+// EstimateMovement with any number of gestures: the rough targets of the
+// gestures fitted together (increasing), the measured one at index `central`
+// (at least 1: the gesture into the previous target comes first), the data
+// from data_start_s to data_end_s. The other gestures are dropped by BIC when
+// they do not move, as EstimateMovement's neighbours. E.g. a take's last
+// movement, which no movement follows: {previous, target}, central 1, the
+// data to the end of the hold. Throws InvalidInput for bad options, unordered
+// times or an empty window.
+MovementEstimate EstimateMovementAmong(const SampledTrajectory& trajectory, const std::vector<double>& rough_targets_s,
+                                       size_t central, double data_start_s, double data_end_s,
+                                       const MovementFitOptions& options = {});
 // Every movement of a sequence of rough target times (increasing): element i
 // (i = 1 .. n−1) is the movement from target i−1 to target i; element 0 is not
 // fitted (reason "first target"). The last movement uses target + (target −

@@ -323,6 +323,46 @@ TEST(PhasingMovement, TargetsStayWithinTheirToleranceAfterALongHold) {
       }
 }
 
+// A take's last movement (the final return to rest): long and slow, then a
+// hold to the end of the take, fitted alone with the gesture before it
+// (EstimateMovementAmong, {previous, target}, as the key timing now fits a
+// component's last movement): unbiased. 20 draws, 3 path terms, 0.2 mm
+// noise, rough targets within ±40 ms. (On these exact minimum-jerk paths a
+// made-up third gesture after it does no harm either; on the virtual cuer's
+// curved fingertip paths it took the slow tail: docs/analysis.md item 8.)
+TEST(PhasingMovement, ALastMovementFittedWithoutANextGestureIsUnbiased) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<double> target_ms, onset_ms;
+  for (int i = 0; i < 20; ++i) {
+    const double onset = 0.9 + 0.1 * u(rng), duration = 0.3 + 0.15 * u(rng);
+    const std::vector<Move> moves{{0.3, 0.5, 30.0 * RandomDirection(5, rng)},
+                                  {onset, onset + duration, 60.0 * RandomDirection(5, rng)}};
+    const double end = onset + duration + 0.25;
+    const Eigen::MatrixXd x = Sample(Eigen::VectorXd::Zero(5), moves, 120.0, end, 0.2, rng);
+    SampledTrajectory tr{&x, 120.0, 0.0};
+    MovementFitOptions o;
+    o.path_terms = 3;
+    const double guess = onset + duration + 0.08 * (u(rng) - 0.5);
+    const MovementEstimate e = EstimateMovementAmong(tr, {0.5, guess}, 1, 0.5 - o.lookback_s, end, o);
+    ASSERT_TRUE(e.Usable()) << e.reason;
+    target_ms.push_back(1000.0 * (e.target_s - (onset + duration)));
+    onset_ms.push_back(1000.0 * (e.onset_s - onset));
+  }
+  EXPECT_LT(std::abs(Errors::Mean(target_ms)), 5.0);
+  EXPECT_LT(std::abs(Errors::Mean(onset_ms)), 5.0);
+  for (double t : target_ms) EXPECT_LT(std::abs(t), 20.0);
+}
+
+TEST(PhasingMovement, AmongRefusesUnorderedTimesAndAnEmptyWindow) {
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(200, 3);
+  SampledTrajectory tr{&x, 120.0, 0.0};
+  EXPECT_THROW(EstimateMovementAmong(tr, {0.5, 0.4}, 1, 0.3, 1.0), InvalidInput);
+  EXPECT_THROW(EstimateMovementAmong(tr, {0.5}, 0, 0.3, 1.0), InvalidInput);
+  EXPECT_THROW(EstimateMovementAmong(tr, {0.2, 0.5, 0.8}, 3, 0.1, 1.0), InvalidInput);
+  EXPECT_THROW(EstimateMovementAmong(tr, {0.2, 0.5}, 1, 1.0, 0.9), InvalidInput);
+}
+
 TEST(PhasingMovement, NoChangeIsLeftOut) {
   std::mt19937_64 rng(2);
   // Still between two real movements: the middle "movement" has no change.
