@@ -537,20 +537,6 @@ Window SequenceWindow(const std::vector<double>& targets, size_t i, double next_
 
 }  // namespace
 
-MovementEstimate EstimateMovement(const SampledTrajectory& tr, double previous_target_s, double target_s,
-                                  double next_target_s, const MovementFitOptions& o) {
-  CheckTrajectory(tr);
-  CheckTimes(o);
-  if (!(previous_target_s < target_s && target_s < next_target_s))
-    throw InvalidInput("movement timing: the target times must increase (previous < target < next)");
-  Window w;
-  w.rough = {previous_target_s, target_s, next_target_s};
-  w.central = 1;
-  w.data_start = previous_target_s - o.lookback_s;
-  w.data_end = target_s + o.lookahead_fraction * (next_target_s - target_s);
-  return FitWindow(tr, w, o);
-}
-
 MovementEstimate EstimateMovementAmong(const SampledTrajectory& tr, const std::vector<double>& rough_targets_s,
                                        size_t central, double data_start_s, double data_end_s,
                                        const MovementFitOptions& o) {
@@ -568,6 +554,14 @@ MovementEstimate EstimateMovementAmong(const SampledTrajectory& tr, const std::v
   w.data_start = data_start_s;
   w.data_end = data_end_s;
   return FitWindow(tr, w, o);
+}
+
+MovementEstimate EstimateMovement(const SampledTrajectory& tr, double previous_target_s, double target_s,
+                                  double next_target_s, const MovementFitOptions& o) {
+  if (!(previous_target_s < target_s && target_s < next_target_s))
+    throw InvalidInput("movement timing: the target times must increase (previous < target < next)");
+  return EstimateMovementAmong(tr, {previous_target_s, target_s, next_target_s}, 1, previous_target_s - o.lookback_s,
+                               target_s + o.lookahead_fraction * (next_target_s - target_s), o);
 }
 
 std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& tr, const std::vector<double>& targets,
