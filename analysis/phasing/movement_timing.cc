@@ -336,6 +336,8 @@ std::string MovementFitOptions::Check() const {
   if (!(lookahead_fraction > 0.0 && lookahead_fraction <= 1.0)) return "lookahead_fraction must be in (0, 1]";
   if (!(onset_window_s >= 0.0)) return "onset_window_s must be >= 0";
   if (!(max_time_sd_s > 0.0)) return "max_time_sd_s must be > 0";
+  if (!(time_sd_reference_rate_hz >= 0.0 && std::isfinite(time_sd_reference_rate_hz)))
+    return "time_sd_reference_rate_hz must be a finite number >= 0";
   if (max_iterations < 1) return "max_iterations must be >= 1";
   return "";
 }
@@ -509,7 +511,9 @@ MovementEstimate FitWindow(const SampledTrajectory& tr, const Window& w, const M
     e.onset_sd_s = std::sqrt(std::max(0.0, cov(qc, qc)));
     e.target_sd_s = std::sqrt(std::max(0.0, cov(qc, qc) + cov(qc + 1, qc + 1) + 2.0 * cov(qc, qc + 1)));
   }
-  if (e.moved && !(e.onset_sd_s <= o.max_time_sd_s && e.target_sd_s <= o.max_time_sd_s)) {
+  const double ref = o.time_sd_reference_rate_hz;
+  const double gate = ref > 0.0 && tr.rate_hz > ref ? o.max_time_sd_s * std::sqrt(ref / tr.rate_hz) : o.max_time_sd_s;
+  if (e.moved && !(e.onset_sd_s <= gate && e.target_sd_s <= gate)) {
     e.determined = false;
     e.reason = "undetermined";
   }

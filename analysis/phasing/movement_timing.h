@@ -67,6 +67,14 @@ struct MovementFitOptions {
   // (MovementEstimate::onset_sd_s, target_sd_s) exceeds this is flagged
   // determined = false (reason "undetermined"). Infinity = no gate.
   double max_time_sd_s = std::numeric_limits<double>::infinity();
+  // The gate above holds at this capture rate and tightens by
+  // sqrt(reference / rate) above it: the standard errors shrink with the
+  // number of samples, the trade between overlapping gestures does not (at
+  // 240 Hz the 8 ms gate of csw phasing let through placement onsets 11 ms
+  // late on average, 6 ms with this). Below it the gate stays as it is
+  // (loosened at 60 Hz, the onsets came out 13 ms late, sd 59 ms).
+  // 0 = the gate at every rate as given. docs/analysis-phasing.md.
+  double time_sd_reference_rate_hz = 120.0;
   std::string Check() const;  // "" when valid, else the reason
 };
 

@@ -132,6 +132,33 @@ TEST(PhasingMovement, QualityGateFlagsEstimatesAboveTheStandardErrorLimit) {
   EXPECT_TRUE(EstimateMovement(tr, 0.2, 0.7, 1.1, o).Usable());
 }
 
+// Above the reference rate the gate tightens by sqrt(reference / rate): at 480
+// Hz with the reference at 120 Hz, a limit 1.5 times the estimate's larger
+// standard error passes without the scaling and fails with it (half the
+// limit: 0.75 times); at the reference rate itself nothing changes.
+TEST(PhasingMovement, QualityGateTightensAboveItsReferenceRate) {
+  std::mt19937_64 rng(11);
+  const Move m{0.40, 0.70, Eigen::Vector3d(40.0, -10.0, 5.0)};
+  const Eigen::MatrixXd x = Sample(Eigen::Vector3d(0, 0, 0), {m}, 480.0, 1.3, 0.2, rng);
+  SampledTrajectory tr{&x, 480.0, 0.0};
+  const MovementEstimate free = EstimateMovement(tr, 0.2, 0.7, 1.1);
+  ASSERT_TRUE(free.Usable());
+  MovementFitOptions o;
+  o.max_time_sd_s = 1.5 * std::max(free.onset_sd_s, free.target_sd_s);
+  o.time_sd_reference_rate_hz = 0.0;  // the limit as given
+  EXPECT_TRUE(EstimateMovement(tr, 0.2, 0.7, 1.1, o).Usable());
+  o.time_sd_reference_rate_hz = 120.0;  // 1.5 x sqrt(120 / 480) = 0.75 x the error
+  const MovementEstimate gated = EstimateMovement(tr, 0.2, 0.7, 1.1, o);
+  EXPECT_FALSE(gated.determined);
+  EXPECT_EQ(gated.reason, "undetermined");
+  o.time_sd_reference_rate_hz = 480.0;  // at the reference rate: as given
+  EXPECT_TRUE(EstimateMovement(tr, 0.2, 0.7, 1.1, o).Usable());
+  o.time_sd_reference_rate_hz = 960.0;  // below the reference: never loosened, never tightened
+  EXPECT_TRUE(EstimateMovement(tr, 0.2, 0.7, 1.1, o).Usable());
+  o.time_sd_reference_rate_hz = -1.0;
+  EXPECT_THROW(EstimateMovement(tr, 0.2, 0.7, 1.1, o), InvalidInput);
+}
+
 // A movement that starts 200 ms before the previous target (overlapping keys):
 // the default window (from 120 ms before the previous target) misses its
 // onset (about 10 ms off here); with onset_window_s = 0.5 the window reaches back to the gesture

@@ -228,9 +228,14 @@ PhasingModel Synchronous() {
 
 // check_v: also hold lone-V keys to the bound (about 0.5 per sentence: only
 // the 100-sentence runs have enough of them for a mean within a few ms).
-void Check(const PhasingModel& model, const char* label, int sentences, double bound_ms, bool check_v) {
+// rate_hz: the capture rate (0: the simulator's); max_undetermined: the
+// largest share of the moved placement changes the standard-error gate may
+// leave out.
+void Check(const PhasingModel& model, const char* label, int sentences, double bound_ms, bool check_v,
+           double rate_hz = 0.0, double max_undetermined = 0.6) {
   SimulateOptions so;
   so.audio = false;
+  if (rate_hz > 0.0) so.rate_hz = rate_hz;
   so.phasing = model;
   VirtualCuer cuer(so);
   const std::vector<std::string> texts = ShippedSentences();
@@ -266,8 +271,8 @@ void Check(const PhasingModel& model, const char* label, int sentences, double b
       EXPECT_LT(std::abs(tg.mean_ms), bound_ms) << label << " " << KeyTypeLabel(type);
       EXPECT_LE(t.missed, (on.count + t.undetermined) / 10) << "changed components reported as still (at most 10 %)";
       // The gate leaves out at most 60 % of the moved placement changes (about
-      // 45-55 % measured: docs/analysis-phasing.md).
-      EXPECT_LE(t.undetermined, 3 * (on.count + t.undetermined) / 5) << label << " " << KeyTypeLabel(type);
+      // 45-55 % measured at 120 Hz: docs/analysis-phasing.md).
+      EXPECT_LE(t.undetermined, max_undetermined * (on.count + t.undetermined)) << label << " " << KeyTypeLabel(type);
     }
 }
 
@@ -283,6 +288,22 @@ TEST(PhasingVirtualCuer, KinematicTimesMatchTheTruthShiftedTiming) {
 
 TEST(PhasingVirtualCuer, KinematicTimesMatchTheTruthSynchronousTiming) {
   Check(Synchronous(), "synchronous", csw::testing::kSanitized ? 3 : 30, kBoundMs, false);
+}
+
+// Another lab's capture rate: the estimator works in seconds, so the same
+// bound holds for takes captured at 60 and at 240 Hz (the simulator's noise,
+// occlusions and dropouts as its defaults). Measured (30 sentences,
+// 2026-12-05), CV placement / shape onset and target errors: 60 Hz +1.6 /
+// -9.9, +1.1 / +9.6 ms; 240 Hz +5.1 / +5.2, +0.0 / -2.8 ms (+11.2 ms
+// placement onsets before the gate tightened above 120 Hz:
+// MovementFitOptions::time_sd_reference_rate_hz); 120 Hz (the test above)
+// +4.5 / +0.3, -2.0 / -1.0 ms. With half the samples per movement more
+// placement fits exceed the 8 ms gate at 60 Hz (75 of the 127 moved CV
+// placement changes left out, against 80 of 145 at 120 Hz), hence the wider
+// share allowed there. docs/analysis-phasing.md, "Other capture rates".
+TEST(PhasingVirtualCuer, KinematicTimesMatchTheTruthOtherCaptureRates) {
+  Check(PhasingModel(), "default at 60 Hz", csw::testing::kSanitized ? 3 : 30, kBoundMs, false, 60.0, 0.7);
+  if (!csw::testing::kSanitized) Check(PhasingModel(), "default at 240 Hz", 30, kBoundMs, false, 240.0);
 }
 
 }  // namespace
