@@ -527,12 +527,19 @@ void CheckTimes(const MovementFitOptions& o) {
 // The window of movement i of a sequence of rough targets: from the gesture
 // into target i-1 (or an earlier one, so that the data reach back
 // onset_window_s before target i) to the next movement.
-Window SequenceWindow(const std::vector<double>& targets, size_t i, double next_target, const MovementFitOptions& o) {
+// The window of movement i of a sequence: the gestures into the targets from
+// j0 (onset_window_s back) to i, and the gesture into the next target; the
+// last movement has none (no movement follows: a made-up next gesture took the
+// slow tail of the return to rest, docs/analysis.md), its data running as far
+// past the target as a next target one interval later would have given.
+Window SequenceWindow(const std::vector<double>& targets, size_t i, const MovementFitOptions& o) {
   Window w;
   size_t j0 = i - 1;
   while (j0 > 0 && targets[j0] > targets[i] - o.onset_window_s) --j0;
   for (size_t j = j0; j <= i; ++j) w.rough.push_back(targets[j]);
-  w.rough.push_back(next_target);
+  const bool last = i + 1 >= targets.size();
+  const double next_target = last ? targets[i] + (targets[i] - targets[i - 1]) : targets[i + 1];
+  if (!last) w.rough.push_back(next_target);
   w.central = static_cast<int>(i - j0);
   w.data_start = targets[j0] - o.lookback_s;
   w.data_end = targets[i] + o.lookahead_fraction * (next_target - targets[i]);
@@ -576,10 +583,7 @@ std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& tr, con
     if (!(targets[i] > targets[i - 1])) throw InvalidInput("movement timing: the target times must increase");
   std::vector<MovementEstimate> out(targets.size());
   if (!out.empty()) out[0].reason = "first target";
-  const auto next_of = [&](size_t i) {
-    return i + 1 < targets.size() ? targets[i + 1] : targets[i] + (targets[i] - targets[i - 1]);
-  };
-  for (size_t i = 1; i < targets.size(); ++i) out[i] = FitWindow(tr, SequenceWindow(targets, i, next_of(i), o), o);
+  for (size_t i = 1; i < targets.size(); ++i) out[i] = FitWindow(tr, SequenceWindow(targets, i, o), o);
   // Further passes: each movement again, the other gestures of its window
   // started from (and kept near) their own estimates of the previous pass,
   // where each was the central movement of its window (block coordinate
@@ -587,7 +591,7 @@ std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& tr, con
   for (int pass = 0; pass < o.refinement_passes; ++pass) {
     std::vector<MovementEstimate> refined = out;
     for (size_t i = 1; i < targets.size(); ++i) {
-      Window w = SequenceWindow(targets, i, next_of(i), o);
+      Window w = SequenceWindow(targets, i, o);
       const size_t j0 = i - static_cast<size_t>(w.central);
       const size_t kg = w.rough.size();
       w.known.assign(kg, false);

@@ -381,6 +381,29 @@ TEST(PhasingMovement, ALastMovementFittedWithoutANextGestureIsUnbiased) {
   for (double t : target_ms) EXPECT_LT(std::abs(t), 20.0);
 }
 
+// EstimateMovements fits a sequence's last movement without a next gesture
+// (none follows): the same estimate as EstimateMovementAmong with the gesture
+// before it and data to half an interval past the target, and on target.
+TEST(PhasingMovement, ASequencesLastMovementHasNoMadeUpNextGesture) {
+  std::mt19937_64 rng(8);
+  const std::vector<Move> moves{{0.3, 0.6, Eigen::Vector3d(40.0, 0.0, 10.0)},
+                                {0.9, 1.25, Eigen::Vector3d(-30.0, 25.0, 0.0)}};
+  const Eigen::MatrixXd x = Sample(Eigen::Vector3d::Zero(), moves, 120.0, 1.8, 0.2, rng);
+  SampledTrajectory tr{&x, 120.0, 0.0};
+  MovementFitOptions o;
+  o.refinement_passes = 0;
+  const std::vector<double> targets{0.6, 1.27};
+  const std::vector<MovementEstimate> est = EstimateMovements(tr, targets, o);
+  ASSERT_EQ(est.size(), 2u);
+  ASSERT_TRUE(est[1].Usable()) << est[1].reason;
+  const MovementEstimate alone =
+      EstimateMovementAmong(tr, {0.6, 1.27}, 1, 0.6 - o.lookback_s, 1.27 + o.lookahead_fraction * (1.27 - 0.6), o);
+  EXPECT_DOUBLE_EQ(est[1].target_s, alone.target_s);
+  EXPECT_DOUBLE_EQ(est[1].onset_s, alone.onset_s);
+  EXPECT_NEAR(est[1].target_s, 1.25, 0.010);
+  EXPECT_NEAR(est[1].onset_s, 0.9, 0.010);
+}
+
 TEST(PhasingMovement, AmongRefusesUnorderedTimesAndAnEmptyWindow) {
   Eigen::MatrixXd x = Eigen::MatrixXd::Zero(200, 3);
   SampledTrajectory tr{&x, 120.0, 0.0};
