@@ -511,8 +511,7 @@ MovementEstimate FitWindow(const SampledTrajectory& tr, const Window& w, const M
     e.onset_sd_s = std::sqrt(std::max(0.0, cov(qc, qc)));
     e.target_sd_s = std::sqrt(std::max(0.0, cov(qc, qc) + cov(qc + 1, qc + 1) + 2.0 * cov(qc, qc + 1)));
   }
-  const double ref = o.time_sd_reference_rate_hz;
-  const double gate = ref > 0.0 && tr.rate_hz > ref ? o.max_time_sd_s * std::sqrt(ref / tr.rate_hz) : o.max_time_sd_s;
+  const double gate = EffectiveTimeSdLimit(o, tr.rate_hz);
   if (e.moved && !(e.onset_sd_s <= gate && e.target_sd_s <= gate)) {
     e.determined = false;
     e.reason = "undetermined";
@@ -611,6 +610,11 @@ std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& tr, con
     out = refined;
   }
   return out;
+}
+
+double EffectiveTimeSdLimit(const MovementFitOptions& o, double rate_hz) {
+  const double ref = o.time_sd_reference_rate_hz;
+  return ref > 0.0 && rate_hz > ref ? o.max_time_sd_s * std::sqrt(ref / rate_hz) : o.max_time_sd_s;
 }
 
 MovementEstimate ThresholdMovement(const SampledTrajectory& tr, double from_s, double to_s, double fraction) {

@@ -134,6 +134,11 @@ std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& traject
                                                 const std::vector<double>& target_times_s,
                                                 const MovementFitOptions& options = {});
 
+// The standard-error limit of the quality gate on a trajectory sampled at
+// rate_hz: max_time_sd_s, tightened by sqrt(time_sd_reference_rate_hz /
+// rate_hz) above the reference rate (MovementFitOptions).
+double EffectiveTimeSdLimit(const MovementFitOptions& options, double rate_hz);
+
 // The fraction-of-peak-speed threshold (kept to compare: biased), in the window
 // [from_s, to_s]: onset = first time before the speed peak where the speed
 // exceeds fraction · peak, target = last time after it. Speeds from central

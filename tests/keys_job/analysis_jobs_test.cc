@@ -177,6 +177,34 @@ TEST(PhasingJob, KinematicTimesFollowTheTruthAndTheCsvHasOneRowPerKey) {
   EXPECT_EQ(lines - 1, r["keys_measured"].get<int64_t>());
   EXPECT_FALSE(PhasingText(r).empty());
   EXPECT_NE(PhasingText(r).find("CV placement: onset"), std::string::npos);
+  // The placement gate in effect: 8 ms at the simulator's 120 Hz (the
+  // reference rate, so not tightened), per take and per rate.
+  const json& gate = r["placement_time_sd_gate"];
+  EXPECT_DOUBLE_EQ(gate["limit_ms"].get<double>(), 8.0);
+  EXPECT_DOUBLE_EQ(gate["reference_rate_hz"].get<double>(), 120.0);
+  ASSERT_EQ(gate["by_rate"].size(), 1u);
+  EXPECT_DOUBLE_EQ(gate["by_rate"][0]["rate_hz"].get<double>(), 120.0);
+  EXPECT_DOUBLE_EQ(gate["by_rate"][0]["limit_ms"].get<double>(), 8.0);
+  for (const json& take : r["takes"]) EXPECT_DOUBLE_EQ(take["placement_time_sd_limit_ms"].get<double>(), 8.0);
+  EXPECT_NE(PhasingText(r).find("undetermined: placement onset or target standard error over 8.0 ms (× √(120.0 Hz / "
+                                "rate) above 120.0 Hz)\n"),
+            std::string::npos)
+      << PhasingText(r);
+}
+
+// The text names the tightened limit of each capture rate above the reference
+// (8 ms x sqrt(120 / 240) = 5.66 ms).
+TEST(PhasingJob, TextNamesThePlacementGateOfEachRate) {
+  json r = {{"keys_measured", 0}, {"takes", json::array()}};
+  r["placement_time_sd_gate"] = {
+      {"limit_ms", 8.0},
+      {"reference_rate_hz", 120.0},
+      {"by_rate", {{{"rate_hz", 100.0}, {"limit_ms", 8.0}}, {{"rate_hz", 240.0}, {"limit_ms", 8.0 * std::sqrt(0.5)}}}}};
+  const std::string text = PhasingText(r);
+  EXPECT_NE(text.find("standard error over 8.0 ms (× √(120.0 Hz / rate) above 120.0 Hz); 5.7 ms at 240.0 Hz\n"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("at 100.0 Hz"), std::string::npos) << text;  // not tightened there
 }
 
 // Without label tiers to start from (--targets aligned), the rough targets

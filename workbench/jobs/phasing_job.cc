@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -179,6 +180,8 @@ json Phasing(const PhasingOptions& options, Progress& progress) {
   // residual): those whose onset or target standard error exceeds 8 ms are
   // left out and counted ("undetermined"; docs/analysis-phasing.md).
   placement_fit.max_time_sd_s = kMaxPlacementTimeSdS;
+  // The limit in effect per capture rate (tightened above the reference rate).
+  std::map<double, double> gate_by_rate;
   json left_out = {{"placement", json::object()}, {"shape", json::object()}};
   for (size_t i = 0; i < ranges.size(); ++i) {
     const TakeRange& range = ranges[i];
@@ -191,6 +194,8 @@ json Phasing(const PhasingOptions& options, Progress& progress) {
                        "'");
     if (!(take.rate_hz > 0)) throw InvalidInput(where + ": no frame rate");
     const double rate = take.rate_hz;
+    const double gate_s = phasing::EffectiveTimeSdLimit(placement_fit, rate);
+    gate_by_rate[rate] = gate_s;
     const LabelTier* phone_tier = FindTier(take.tiers, options.phones);
     if (phone_tier == nullptr)
       throw InvalidInput(where + ": no phone tier '" + options.phones + "' (tiers: " + TierNames(take.tiers) +
@@ -426,6 +431,7 @@ json Phasing(const PhasingOptions& options, Progress& progress) {
                {"keys", measured},
                {"rough_targets", targets},
                {"placement_reseeded", reseeded},
+               {"placement_time_sd_limit_ms", 1000.0 * gate_s},
                {"phone_warnings", cued.mapped.warnings}};
     if (!options.truth.empty()) tj["truth"] = truth ? "matched" : truth_why;
     result["takes"].push_back(tj);
@@ -504,6 +510,11 @@ json Phasing(const PhasingOptions& options, Progress& progress) {
     result["figures"] = figure_files;
   }
   result["kinematic_changes"] = left_out;
+  json by_rate = json::array();
+  for (const auto& [rate_hz, limit_s] : gate_by_rate) by_rate.push_back({{"rate_hz", rate_hz}, {"limit_ms", 1000.0 * limit_s}});
+  result["placement_time_sd_gate"] = {{"limit_ms", 1000.0 * placement_fit.max_time_sd_s},
+                                      {"reference_rate_hz", placement_fit.time_sd_reference_rate_hz},
+                                      {"by_rate", by_rate}};
   result["keys_measured"] = rows.size();
   return result;
 }
@@ -549,6 +560,20 @@ std::string PhasingText(const json& r) {
       for (const auto& [why, n] : t.items()) o << " " << why << " " << n.get<int64_t>();
       o << (std::string(c) == "placement" ? ";" : "\n");
     }
+  }
+  if (r.contains("placement_time_sd_gate")) {
+    const json& g = r["placement_time_sd_gate"];
+    std::ostringstream l;
+    l.setf(std::ios::fixed);
+    l.precision(1);
+    l << "undetermined: placement onset or target standard error over " << g["limit_ms"].get<double>() << " ms";
+    if (g["reference_rate_hz"].get<double>() > 0)
+      l << " (× √(" << g["reference_rate_hz"].get<double>() << " Hz / rate) above " << g["reference_rate_hz"].get<double>()
+        << " Hz)";
+    for (const json& b : g["by_rate"])
+      if (b["limit_ms"].get<double>() != g["limit_ms"].get<double>())
+        l << "; " << b["limit_ms"].get<double>() << " ms at " << b["rate_hz"].get<double>() << " Hz";
+    o << l.str() << "\n";
   }
   if (r.contains("csv")) o << "per-key CSV: " << r["csv"].get<std::string>() << "\n";
   if (r.contains("figures"))
