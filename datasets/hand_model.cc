@@ -162,10 +162,14 @@ struct VirtualHand::Frames {
 
 VirtualHand::VirtualHand(HandConfig config) : VirtualHand(std::move(config), "default") {}
 
-VirtualHand::VirtualHand(HandConfig config, const std::string& layout) : config_(std::move(config)) {
+VirtualHand::VirtualHand(HandConfig config, const std::string& layout)
+    : VirtualHand(std::move(config), layout, 1.0) {}
+
+VirtualHand::VirtualHand(HandConfig config, const std::string& layout, double size) : config_(std::move(config)) {
   if (layout != "default" && layout != "lab2") throw InvalidInput("unknown simulator layout \"" + layout + "\"");
+  if (!(size >= 0.5 && size <= 2.0)) throw InvalidInput("hand size must be in [0.5, 2] times the layout's");
   const bool lab2 = layout == "lab2";
-  if (lab2) scale_ = kLab2HandScale;
+  scale_ = (lab2 ? kLab2HandScale : 1.0) * size;
   static const char* kSuffix[5][4] = {{"thumb_cmc_flex", "thumb_cmc_abd", "thumb_mcp", "thumb_ip"},
                                       {"index_mcp_flex", "index_mcp_abd", "index_pip", "index_dip"},
                                       {"middle_mcp_flex", "middle_mcp_abd", "middle_pip", "middle_dip"},

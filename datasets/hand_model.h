@@ -65,6 +65,10 @@ class VirtualHand {
   // markers), no PD2, two markers on every phalanx (the distal ones: the
   // dorsal distal marker and the nail), names prefixed "RH_". Throws InvalidInput for an unknown layout.
   VirtualHand(HandConfig config, const std::string& layout);
+  // The same with the hand `size` times the layout's (every segment and marker
+  // offset scaled; the joint angles unchanged). Throws InvalidInput unless
+  // size is in [0.5, 2].
+  VirtualHand(HandConfig config, const std::string& layout, double size);
   double scale() const { return scale_; }
 
   const HandConfig& config() const { return config_; }

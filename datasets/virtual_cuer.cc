@@ -102,6 +102,7 @@ std::string SimulateOptions::Check() const {
     return "unknown layout \"" + layout + "\" (known: " + known + ")";
   }
   if (!(rate_hz >= 10.0 && rate_hz <= 2000.0)) return "rate_hz must be in [10, 2000]";
+  if (!(hand_scale >= 0.5 && hand_scale <= 2.0)) return "hand_scale must be in [0.5, 2]";
   if (!(noise_mm >= 0.0 && noise_mm <= 50.0)) return "noise_mm must be in [0, 50]";
   if (cameras < 1 || cameras > 64) return "cameras must be in [1, 64]";
   if (min_cameras < 1 || min_cameras > cameras) return "min_cameras must be in [1, cameras]";
@@ -127,7 +128,8 @@ std::string SimulateOptions::Check() const {
 VirtualCuer::VirtualCuer(const SimulateOptions& options)
     : options_(options),
       hand_(options.hand_config_path.empty() ? DefaultHandConfig() : LoadHandConfig(options.hand_config_path),
-            IsSimulatorLayout(options.layout) ? options.layout : std::string("default")) {
+            IsSimulatorLayout(options.layout) ? options.layout : std::string("default"),
+            options.hand_scale >= 0.5 && options.hand_scale <= 2.0 ? options.hand_scale : 1.0) {
   if (std::string why = options.Check(); !why.empty()) throw InvalidInput("simulate options: " + why);
   face_ = VirtualFace(options.layout);
   placements_ = options.placement_config_path.empty()

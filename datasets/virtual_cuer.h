@@ -36,6 +36,9 @@ struct SimulateOptions {
   // follow the head's translation fully and its rotation partly, 2-marker
   // phalanges, other names, a smaller hand).
   std::string layout = "default";
+  // The hand's size relative to the layout's (0.5-2): every finger segment and
+  // marker offset scaled, as for another cuer's hand.
+  double hand_scale = 1.0;
   // Sentences to cue (kSentences); empty = the shipped list (datasets/sentences_fr.txt).
   std::vector<std::string> sentences;
   int count = 0;  // kSentences: first `count` sentences (0 = all)

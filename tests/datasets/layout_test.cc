@@ -72,6 +72,29 @@ TEST(SimulatorLayout, Lab2MarkerSetValidatesWithOtherNamesAndCounts) {
               kLab2HandScale * standard.hand().TipInForearm(rest, VirtualHand::kMiddle).norm(), 1e-9);
 }
 
+// SimulateOptions::hand_scale: another cuer's hand, every segment scaled (a
+// fingertip 0.8 times as far from the wrist centre, on either layout);
+// out-of-range sizes refused.
+TEST(SimulatorLayout, HandScaleScalesTheHand) {
+  const HandConfig config = DefaultHandConfig();
+  const Eigen::VectorXd rest = config.Posture(0).angles;
+  for (const std::string layout : {"default", "lab2"}) {
+    SimulateOptions o;
+    o.layout = layout;
+    const VirtualCuer base(o);
+    o.hand_scale = 0.8;
+    const VirtualCuer small(o);
+    EXPECT_NEAR(small.hand().TipInForearm(rest, VirtualHand::kIndex).norm(),
+                0.8 * base.hand().TipInForearm(rest, VirtualHand::kIndex).norm(), 1e-9)
+        << layout;
+  }
+  SimulateOptions bad;
+  bad.hand_scale = 0.3;
+  EXPECT_EQ(bad.Check(), "hand_scale must be in [0.5, 2]");
+  EXPECT_THROW(VirtualCuer{bad}, InvalidInput);
+  EXPECT_THROW(VirtualHand(DefaultHandConfig(), "default", 3.0), InvalidInput);
+}
+
 TEST(SimulatorLayout, Lab2TakeHasTheStatedMarkerCounts) {
   const SimulationResult& r = Lab2Sentence();
   EXPECT_EQ(r.take.marker_names.size(), 28u + 43u);

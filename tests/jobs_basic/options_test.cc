@@ -167,6 +167,17 @@ TEST(SimulateJobOptionsCheck, RejectsEachBadRequestWithItsReason) {
   o.dropouts_per_s = 11;
   EXPECT_EQ(o.Check(), "simulate: --dropouts must be in [0, 10] per s");
   o.dropouts_per_s = 0.03;
+  o.hand_scale = 0.4;
+  EXPECT_EQ(o.Check(), "simulate: --hand-scale must be in [0.5, 2]");
+  o.hand_scale = 2.5;
+  EXPECT_EQ(o.Check(), "simulate: --hand-scale must be in [0.5, 2]");
+  o.hand_scale = 0.8;
+  EXPECT_EQ(o.Check(), "");
+  EXPECT_EQ(ToSimulateOptions(o).hand_scale, 0.8);
+  o.corpus = "signs";
+  EXPECT_EQ(o.Check(), "simulate: --hand-scale applies to the virtual cuer, not signs");
+  o.corpus = "sentences";
+  o.hand_scale = 1.0;
   o.phasing_file = (dir / "none.json").string();
   EXPECT_EQ(o.Check(), "simulate: --phasing " + o.phasing_file + ": no such file");
   std::ofstream(dir / "p.json") << "{}";

@@ -766,29 +766,35 @@ TEST(VirtualCuerKeys, OtherLabLayoutAndShiftedTiming) {
   EXPECT_GE(filled.placement.Accuracy(), 0.72);
 }
 
-// Another lab's capture rate: nothing in the recogniser, the decoding or the
-// key timing may count in frames of the virtual cuer's 120 Hz. The same
-// sentences captured at 60 and 240 Hz (noise, occlusions and dropouts as the
-// defaults), trained on a third, scored on the rest.
-TEST(VirtualCuerKeys, OtherFrameRates) {
-  // Bounds per rate: the mean aligned key error on clean markers and on the
+// Another lab's capture rate and another cuer's hand: nothing in the
+// recogniser, the decoding or the key timing may count in frames of the
+// virtual cuer's 120 Hz or in millimetres of its hand. The same sentences
+// captured at 60 and 240 Hz, and with a hand 0.75 and 1.25 times the size
+// (noise, occlusions and dropouts as the defaults), trained on a third,
+// scored on the rest.
+TEST(VirtualCuerKeys, OtherFrameRatesAndHandSizes) {
+  // Bounds per case: the mean aligned key error on clean markers and on the
   // spline/DCT-filled takes (ms).
   struct Case {
-    double rate, clean_ms, filled_ms;
+    double rate, hand_scale, clean_ms, filled_ms;
   };
-  for (const Case& c : {Case{60.0, 25.0, 40.0}, Case{240.0, 21.0, 28.0}}) {
+  for (const Case& c : {Case{60.0, 1.0, 25.0, 40.0}, Case{240.0, 1.0, 21.0, 28.0}, Case{120.0, 0.75, 20.0, 30.0},
+                        Case{120.0, 1.25, 21.0, 34.0}}) {
     const double rate = c.rate;
-    if (testing::kSanitized && rate > 100.0) continue;  // the 240 Hz takes are slow under the sanitizers
-    SCOPED_TRACE("capture at " + std::to_string(rate) + " Hz");
+    if (testing::kSanitized && (rate > 100.0 || c.hand_scale != 1.0)) continue;  // slow under the sanitizers
+    const std::string label =
+        std::to_string(static_cast<int>(rate)) + " Hz, hand x" + std::to_string(c.hand_scale).substr(0, 4);
+    SCOPED_TRACE(label);
     const int sentences = testing::kSanitized ? 4 : 15;
     SimulateOptions o = Defaults();
     o.rate_hz = rate;
+    o.hand_scale = c.hand_scale;
     const VirtualCuer cuer(o);
     HandLayout layout;
     Eigen::Matrix3Xd head;
-    const std::vector<Scored> takes = SimulateScored(cuer, sentences, "r" + std::to_string(static_cast<int>(rate)) + "_", layout, head);
+    const std::vector<Scored> takes =
+        SimulateScored(cuer, sentences, "r" + std::to_string(static_cast<int>(rate)) + "_", layout, head);
     ASSERT_EQ(takes[0].r.take.rate_hz, rate);
-    const std::string label = std::to_string(static_cast<int>(rate)) + " Hz";
     const Tally clean = Evaluate(takes, sentences / 3, 1, layout, head, label + ", clean markers");
     const Tally filled = Evaluate(takes, sentences / 3, 0, layout, head, label + ", filled takes");
     if (testing::kSanitized) {
@@ -802,7 +808,9 @@ TEST(VirtualCuerKeys, OtherFrameRates) {
     // filled 27.3 ms (81/97). The simulated timing differs a little with the
     // rate (46, 37 and 42 keys approached), and the dropouts are drawn in
     // frames (1-6), so at 60 Hz the gaps last twice as long as at 120 Hz:
-    // the filled takes lose most there.
+    // the filled takes lose most there. A hand 0.75 times the size: clean
+    // 16.8 ms (90/97), filled 25.0 ms (85/97); 1.25 times: clean 18.1 ms
+    // (90/97), filled 29.4 ms (81/97).
     EXPECT_GE(clean.shape_reached.Accuracy(), 0.97);
     EXPECT_GE(clean.placement_reached.Accuracy(), 0.95);
     EXPECT_GE(static_cast<double>(clean.free_reached_matches) / clean.free_reached, 0.90);

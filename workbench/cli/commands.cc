@@ -194,6 +194,10 @@ class SimulateCommand : public Command {
                      "markers follow the head's translation fully and its rotation partly, 43 hand markers with "
                      "2-marker phalanges, other names, a smaller hand; docs/virtual-cuer.md)")
         ->capture_default_str();
+    sub_->add_option("--hand-scale", options_.hand_scale,
+                     "The cuer's hand size relative to the layout's (0.5-2: every finger segment and marker offset "
+                     "scaled)")
+        ->capture_default_str();
     sub_->add_option("--phasing", options_.phasing_file,
                      "Phasing-model JSON (docs/virtual-cuer.md): gesture start/target laws instead of the defaults");
     sub_->add_option("--law", options_.law,

@@ -54,6 +54,7 @@ SimulateOptions ToSimulateOptions(const SimulateJobOptions& options) {
   o.write_clean = options.clean;
   o.sentences = options.texts;
   o.layout = options.layout;
+  o.hand_scale = options.hand_scale;
   return o;
 }
 
@@ -78,6 +79,7 @@ std::string SimulateJobOptions::Check() const {
     if (!(manual_jitter_s >= 0.0 && manual_jitter_s <= 1.0)) return "simulate: --manual-jitter must be in [0, 1] s";
     if (!texts.empty() || !sentences_file.empty() || !phasing_file.empty())
       return "simulate: --text, --sentences and --phasing apply to the virtual cuer, not signs";
+    if (hand_scale != 1.0) return "simulate: --hand-scale applies to the virtual cuer, not signs";
     std::error_code ec;
     const fs::path out = OutputPath(output);
     if (fs::exists(out, ec) && !fs::is_directory(out, ec)) return "simulate: -o " + output + " is a file, not a folder";
@@ -107,6 +109,7 @@ std::string SimulateJobOptions::Check() const {
   if (!(rate_hz >= 10.0 && rate_hz <= 2000.0)) return "simulate: --rate must be in [10, 2000] Hz";
   if (!(noise_mm >= 0.0 && noise_mm <= 50.0)) return "simulate: --noise must be in [0, 50] mm";
   if (!(dropouts_per_s >= 0.0 && dropouts_per_s <= 10.0)) return "simulate: --dropouts must be in [0, 10] per s";
+  if (!(hand_scale >= 0.5 && hand_scale <= 2.0)) return "simulate: --hand-scale must be in [0.5, 2]";
   if (std::string why = ToSimulateOptions(*this).Check(); !why.empty()) return "simulate: " + why;
   return "";
 }

@@ -32,6 +32,7 @@ struct SimulateJobOptions {
   bool clean = false;  // also write <take>.clean.c3d without artefacts
   // Marker layout: "default" or "lab2" (datasets/virtual_cuer.h, SimulateOptions::layout).
   std::string layout = "default";
+  double hand_scale = 1.0;  // the hand's size relative to the layout's (--hand-scale)
   // Phasing-model JSON (synth/phasing.h LoadPhasingModel) for the gesture
   // times; "" = the defaults. Read by Simulate (a bad file: ParseError naming it).
   std::string phasing_file;
