@@ -162,8 +162,7 @@ struct VirtualHand::Frames {
 
 VirtualHand::VirtualHand(HandConfig config) : VirtualHand(std::move(config), "default") {}
 
-VirtualHand::VirtualHand(HandConfig config, const std::string& layout)
-    : VirtualHand(std::move(config), layout, 1.0) {}
+VirtualHand::VirtualHand(HandConfig config, const std::string& layout) : VirtualHand(std::move(config), layout, 1.0) {}
 
 VirtualHand::VirtualHand(HandConfig config, const std::string& layout, double size) : config_(std::move(config)) {
   if (layout != "default" && layout != "lab2") throw InvalidInput("unknown simulator layout \"" + layout + "\"");

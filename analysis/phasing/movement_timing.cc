@@ -523,14 +523,12 @@ void CheckTimes(const MovementFitOptions& o) {
   if (std::string why = o.Check(); !why.empty()) throw InvalidInput("movement timing options: " + why);
 }
 
-// The window of movement i of a sequence of rough targets: from the gesture
-// into target i-1 (or an earlier one, so that the data reach back
-// onset_window_s before target i) to the next movement.
-// The window of movement i of a sequence: the gestures into the targets from
-// j0 (onset_window_s back) to i, and the gesture into the next target; the
-// last movement has none (no movement follows: a made-up next gesture took the
-// slow tail of the return to rest, docs/analysis.md), its data running as far
-// past the target as a next target one interval later would have given.
+// The window of movement i of a sequence of rough targets: the gestures from
+// the one into target i-1 (or an earlier one, so that the data reach back
+// onset_window_s before target i) to the next movement; the last movement has
+// none (no movement follows: a made-up next gesture took the slow tail of the
+// return to rest, docs/analysis.md), its data running as far past the target
+// as a next target one interval later would have given.
 Window SequenceWindow(const std::vector<double>& targets, size_t i, const MovementFitOptions& o) {
   Window w;
   size_t j0 = i - 1;

@@ -126,10 +126,11 @@ MovementEstimate EstimateMovementAmong(const SampledTrajectory& trajectory, cons
 // Every movement of a sequence of rough target times (increasing): element i
 // (i = 1 .. n−1) is the movement from target i−1 to target i; element 0 is not
 // fitted (reason "first target"). The last movement is fitted without a next
-// gesture (none follows), on data up to half an interval past its target. After the first pass (EstimateMovement on each
-// window), refinement_passes refit every movement with its neighbours started
-// from their own estimates and kept within 30 ms of them (neighbours estimated
-// as still are left out): the recommended entry point.
+// gesture (none follows), on data up to half an interval past its target.
+// After the first pass (EstimateMovement on each window), refinement_passes
+// refit every movement with its neighbours started from their own estimates
+// and kept within 30 ms of them (neighbours estimated as still are left out):
+// the recommended entry point.
 std::vector<MovementEstimate> EstimateMovements(const SampledTrajectory& trajectory,
                                                 const std::vector<double>& target_times_s,
                                                 const MovementFitOptions& options = {});

@@ -511,7 +511,8 @@ json Phasing(const PhasingOptions& options, Progress& progress) {
   }
   result["kinematic_changes"] = left_out;
   json by_rate = json::array();
-  for (const auto& [rate_hz, limit_s] : gate_by_rate) by_rate.push_back({{"rate_hz", rate_hz}, {"limit_ms", 1000.0 * limit_s}});
+  for (const auto& [rate_hz, limit_s] : gate_by_rate)
+    by_rate.push_back({{"rate_hz", rate_hz}, {"limit_ms", 1000.0 * limit_s}});
   result["placement_time_sd_gate"] = {{"limit_ms", 1000.0 * placement_fit.max_time_sd_s},
                                       {"reference_rate_hz", placement_fit.time_sd_reference_rate_hz},
                                       {"by_rate", by_rate}};
@@ -568,8 +569,8 @@ std::string PhasingText(const json& r) {
     l.precision(1);
     l << "undetermined: placement onset or target standard error over " << g["limit_ms"].get<double>() << " ms";
     if (g["reference_rate_hz"].get<double>() > 0)
-      l << " (× √(" << g["reference_rate_hz"].get<double>() << " Hz / rate) above " << g["reference_rate_hz"].get<double>()
-        << " Hz)";
+      l << " (× √(" << g["reference_rate_hz"].get<double>() << " Hz / rate) above "
+        << g["reference_rate_hz"].get<double>() << " Hz)";
     for (const json& b : g["by_rate"])
       if (b["limit_ms"].get<double>() != g["limit_ms"].get<double>())
         l << "; " << b["limit_ms"].get<double>() << " ms at " << b["rate_hz"].get<double>() << " Hz";
