@@ -112,6 +112,8 @@ Lag MedianSpread(std::vector<double> v) {
   return out;
 }
 
+}  // namespace
+
 // Speech anchors (key_timing.h): outlying component targets and repeated keys
 // timed from A1 + the take's own lag.
 void AnchorToSpeech(std::vector<TimedKey>& keys, const std::vector<ExpectedKey>& expected,
@@ -145,6 +147,16 @@ void AnchorToSpeech(std::vector<TimedKey>& keys, const std::vector<ExpectedKey>&
             const Lag& l = group[expected[j].vowel_anchor ? 1 : 0];
             return l.known && std::abs(c.target_s - (expected[j].anchor_s + l.median)) < d;
           };
+          // A neighbour without A1 (a rest) whose component changes: its own
+          // timed target (the return to rest has no syllable to follow).
+          auto nearer_unanchored = [&](size_t j) {
+            return timing(j).changes && std::isfinite(timing(j).target_s) &&
+                   std::abs(c.target_s - timing(j).target_s) < d;
+          };
+          if (k > 0 && !std::isfinite(expected[k - 1].anchor_s))
+            nearer_neighbour = nearer_neighbour || nearer_unanchored(k - 1);
+          if (k + 1 < n && !std::isfinite(expected[k + 1].anchor_s))
+            nearer_neighbour = nearer_neighbour || nearer_unanchored(k + 1);
           for (size_t j = k; j-- > 0;)
             if (std::isfinite(expected[j].anchor_s)) {
               nearer_neighbour = nearer_neighbour || nearer(j);
@@ -193,8 +205,6 @@ void AnchorToSpeech(std::vector<TimedKey>& keys, const std::vector<ExpectedKey>&
     }
   }
 }
-
-}  // namespace
 
 double CombineWithSpeech(double fit_s, double fit_sd_s, double anchor_s, double spread_s, double sd_factor) {
   if (!(sd_factor > 0) || std::isnan(fit_sd_s) || !(spread_s > 0) || !std::isfinite(anchor_s)) return fit_s;

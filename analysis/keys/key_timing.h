@@ -148,6 +148,19 @@ struct TimedKey {
 // or spread_s is not > 0; anchor_s when fit_sd_s is infinite.
 double CombineWithSpeech(double fit_s, double fit_sd_s, double anchor_s, double spread_s, double sd_factor);
 
+// The speech anchors step of DecodeAlignedTimed (above), on keys already timed
+// kinematically: outlying component targets replaced by A1 + the take's lag,
+// kept ones combined with it, repeated keys timed from it. shape_post and
+// place_post (frames × classes, frame f at f / rate_hz) serve the in-class
+// test. A neighbour without A1 (a rest: the return to rest follows no
+// syllable) counts in the nearer-neighbour test with its own timed target
+// when its component changes: a fit that landed on the final return to rest
+// is replaced (virtual cuer, hand 0.75 times the size, spline/DCT-filled
+// takes: worst key 273 -> 190 ms). Keys and expected keys pair by index.
+void AnchorToSpeech(std::vector<TimedKey>& keys, const std::vector<ExpectedKey>& expected,
+                    const KeyTimingOptions& options, const Eigen::MatrixXd& shape_post,
+                    const Eigen::MatrixXd& place_post, double rate_hz);
+
 // Aligned decoding with kinematic target times. Times are seconds from the
 // take's first frame (frame f at f / rate_hz). Throws InvalidInput as
 // DecodeAligned, for bad options, or when the features and posteriors differ

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <vector>
 
@@ -110,12 +111,18 @@ TEST(PhasingMovement, OnsetStandardErrorMatchesTheSpread) {
   EXPECT_LT(rms_se, sd * 1.5);
 }
 
+// The quality-gate tests' movement: 40 mm or so from 0.40 s to 0.70 s, 1.3 s
+// sampled at `rate_hz` with 0.2 mm noise (random seed `seed`).
+Eigen::MatrixXd GateTestMove(double rate_hz, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const Move m{0.40, 0.70, Eigen::Vector3d(40.0, -10.0, 5.0)};
+  return Sample(Eigen::Vector3d(0, 0, 0), {m}, rate_hz, 1.3, 0.2, rng);
+}
+
 // The gate: an estimate whose onset or target standard error exceeds
 // max_time_sd_s keeps its times but is flagged undetermined.
 TEST(PhasingMovement, QualityGateFlagsEstimatesAboveTheStandardErrorLimit) {
-  std::mt19937_64 rng(9);
-  const Move m{0.40, 0.70, Eigen::Vector3d(40.0, -10.0, 5.0)};
-  const Eigen::MatrixXd x = Sample(Eigen::Vector3d(0, 0, 0), {m}, 120.0, 1.3, 0.2, rng);
+  const Eigen::MatrixXd x = GateTestMove(120.0, 9);
   SampledTrajectory tr{&x, 120.0, 0.0};
   const MovementEstimate free = EstimateMovement(tr, 0.2, 0.7, 1.1);
   ASSERT_TRUE(free.Usable());
@@ -137,9 +144,7 @@ TEST(PhasingMovement, QualityGateFlagsEstimatesAboveTheStandardErrorLimit) {
 // standard error passes without the scaling and fails with it (half the
 // limit: 0.75 times); at the reference rate itself nothing changes.
 TEST(PhasingMovement, QualityGateTightensAboveItsReferenceRate) {
-  std::mt19937_64 rng(11);
-  const Move m{0.40, 0.70, Eigen::Vector3d(40.0, -10.0, 5.0)};
-  const Eigen::MatrixXd x = Sample(Eigen::Vector3d(0, 0, 0), {m}, 480.0, 1.3, 0.2, rng);
+  const Eigen::MatrixXd x = GateTestMove(480.0, 11);
   SampledTrajectory tr{&x, 480.0, 0.0};
   const MovementEstimate free = EstimateMovement(tr, 0.2, 0.7, 1.1);
   ASSERT_TRUE(free.Usable());

@@ -73,5 +73,66 @@ TEST(KeyTimingOptions, InClassKeepingNeedsAPosteriorInZeroOneAndANonNegativeReac
   EXPECT_NE(o.Check().find("anchor_in_class_max_s"), std::string::npos);
 }
 
+// A take worked by hand: rest, six keys whose syllables start (A1) every
+// 0.3 s from 0.5 s, rest. Both components change at every key; the fitted
+// targets lie A1 + 0.10, 0.11, 0.09, 0.105, 0.095 s after their A1, and the
+// last key's at 2.28 s, i.e. 0.28 s after its A1 2.0 s. Lags: median
+// 0.1025 s, absolute deviations 0.0025 .. 0.1775, MAD 0.0075, spread 0.0111 s,
+// so the gate is its 80 ms floor: the last key's target (0.1775 s from A1 +
+// lag) is outside it, but within the in-class reach (0.2 s) with the hand in
+// its own class (posteriors all 1), so it is kept — unless the final return
+// to rest, which has no A1, has its target nearer (2.32 s: 0.04 s away), in
+// which case the fit found that return and the target becomes A1 + lag =
+// 2.1025 s.
+std::vector<TimedKey> AnchorTestKeys(double last_fit_s, double rest_target_s, std::vector<ExpectedKey>* expected) {
+  const std::vector<double> fits = {0.60, 0.91, 1.19, 1.505, 1.795, last_fit_s};
+  std::vector<TimedKey> keys(8);
+  expected->assign(8, ExpectedKey{});
+  auto set = [&](size_t k, double target) {
+    for (ComponentTiming* c : {&keys[k].shape, &keys[k].placement}) {
+      c->changes = true;
+      c->kinematic = true;
+      c->target_s = target;
+    }
+    keys[k].target_s = target;
+  };
+  set(0, 0.40);
+  for (size_t k = 1; k <= 6; ++k) {
+    set(k, fits[k - 1]);
+    (*expected)[k].anchor_s = 0.5 + 0.3 * static_cast<double>(k - 1);
+    (*expected)[k].shape = static_cast<int>(k % 2 + 1);
+    (*expected)[k].placement = static_cast<int>(k % 2 + 1);
+  }
+  set(7, rest_target_s);
+  return keys;
+}
+
+TEST(AnchorToSpeech, AFitOnTheFinalReturnToRestIsReplacedByTheSpeech) {
+  const Eigen::MatrixXd shape_post = Eigen::MatrixXd::Ones(300, 9), place_post = Eigen::MatrixXd::Ones(300, 6);
+  std::vector<ExpectedKey> expected;
+  std::vector<TimedKey> keys = AnchorTestKeys(2.28, 2.32, &expected);
+  AnchorToSpeech(keys, expected, KeyTimingOptions{}, shape_post, place_post, 100.0);
+  EXPECT_NEAR(keys[6].shape.target_s, 2.1025, 1e-9);
+  EXPECT_NEAR(keys[6].placement.target_s, 2.1025, 1e-9);
+  EXPECT_TRUE(keys[6].shape.from_speech);
+  // The other keys are within the gate and have no standard error to be
+  // combined with: unchanged.
+  EXPECT_DOUBLE_EQ(keys[3].shape.target_s, 1.19);
+  EXPECT_FALSE(keys[3].shape.from_speech);
+  EXPECT_DOUBLE_EQ(keys[7].shape.target_s, 2.32);  // the rest itself has no A1
+
+  // The return to rest further than A1 + lag: the in-class fit is kept.
+  keys = AnchorTestKeys(2.28, 2.60, &expected);
+  AnchorToSpeech(keys, expected, KeyTimingOptions{}, shape_post, place_post, 100.0);
+  EXPECT_DOUBLE_EQ(keys[6].shape.target_s, 2.28);
+  EXPECT_FALSE(keys[6].shape.from_speech);
+
+  // Out of class (posteriors 0): replaced by the gate alone, wherever the rest.
+  keys = AnchorTestKeys(2.28, 2.60, &expected);
+  AnchorToSpeech(keys, expected, KeyTimingOptions{}, Eigen::MatrixXd::Zero(300, 9), Eigen::MatrixXd::Zero(300, 6),
+                 100.0);
+  EXPECT_NEAR(keys[6].shape.target_s, 2.1025, 1e-9);
+}
+
 }  // namespace
 }  // namespace csw::keys

@@ -294,6 +294,17 @@ double Sd(const std::vector<double>& v) {
   return std::sqrt(s / static_cast<double>(v.size() - 1));
 }
 
+double Worst(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
+
+// The accuracy bars on the reached keys (shape and placement at their
+// labelled frames, free decoding), held wherever the layout, timing, rate or
+// hand size differ from the defaults.
+void ExpectReachedAccuracies(const Tally& t) {
+  EXPECT_GE(t.shape_reached.Accuracy(), 0.97);
+  EXPECT_GE(t.placement_reached.Accuracy(), 0.95);
+  EXPECT_GE(static_cast<double>(t.free_reached_matches) / t.free_reached, 0.90);
+}
+
 // Trains on takes [0, train) and scores the others, with feature set `variant`
 // (0 = filled take, 1 = markers without artefacts).
 Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const HandLayout& layout,
@@ -485,13 +496,9 @@ Tally Evaluate(const std::vector<Scored>& takes, int train, int variant, const H
             << "\n"
             << "aligned " << tally.aligned_correct << " / " << tally.aligned_keys << " = " << tally.aligned_rate
             << ", key target error mean " << Mean(tally.aligned_error_ms) << " ms (sd " << Sd(tally.aligned_error_ms)
-            << ", max "
-            << (tally.aligned_error_ms.empty()
-                    ? 0.0
-                    : *std::max_element(tally.aligned_error_ms.begin(), tally.aligned_error_ms.end()))
-            << "); shape target " << Mean(tally.aligned_shape_error_ms) << " ms, placement target "
-            << Mean(tally.aligned_placement_error_ms) << " ms; reached keys " << Mean(tally.aligned_error_reached_ms)
-            << " ms ("
+            << ", max " << Worst(tally.aligned_error_ms) << "); shape target " << Mean(tally.aligned_shape_error_ms)
+            << " ms, placement target " << Mean(tally.aligned_placement_error_ms) << " ms; reached keys "
+            << Mean(tally.aligned_error_reached_ms) << " ms ("
             << std::count_if(tally.aligned_error_reached_ms.begin(), tally.aligned_error_reached_ms.end(),
                              [](double e) { return e <= 40.0; })
             << " / " << tally.aligned_error_reached_ms.size() << " within 40 ms), approached "
@@ -666,20 +673,20 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
   // (132/163).
   // The floors below guard those numbers against regressions; the reached
   // keys' mean is held under the 25 ms.
-  EXPECT_GE(model.aligned_rate, 0.825);                                                               // 198/236 = 0.839
-  EXPECT_GE(static_cast<double>(model.free_reached_matches) / model.free_reached, 0.92);              // 153/163 = 0.939
-  EXPECT_LE(Mean(model.aligned_error_ms), 22.0);                                                      // 20.3 ms
-  EXPECT_LE(Mean(model.aligned_error_reached_ms), 16.5);                                              // 15.5 ms
-  EXPECT_LE(Mean(model.aligned_error_ms), Mean(model.unanchored_error_ms) - 4.0);                     // 20.3 vs 26.7 ms
-  EXPECT_LE(*std::max_element(model.aligned_error_ms.begin(), model.aligned_error_ms.end()), 175.0);  // 157 ms
-  EXPECT_GE(static_cast<double>(model.aligned_own_reached) / model.aligned_reached, 0.97);            // 161/163 = 0.988
-  EXPECT_GE(static_cast<double>(model.aligned_own) / model.aligned_keys, 0.95);                       // 229/236 = 0.970
+  EXPECT_GE(model.aligned_rate, 0.825);                                                     // 198/236 = 0.839
+  EXPECT_GE(static_cast<double>(model.free_reached_matches) / model.free_reached, 0.92);    // 153/163 = 0.939
+  EXPECT_LE(Mean(model.aligned_error_ms), 22.0);                                            // 20.3 ms
+  EXPECT_LE(Mean(model.aligned_error_reached_ms), 16.5);                                    // 15.5 ms
+  EXPECT_LE(Mean(model.aligned_error_ms), Mean(model.unanchored_error_ms) - 4.0);           // 20.3 vs 26.7 ms
+  EXPECT_LE(Worst(model.aligned_error_ms), 175.0);                                          // 157 ms
+  EXPECT_GE(static_cast<double>(model.aligned_own_reached) / model.aligned_reached, 0.97);  // 161/163 = 0.988
+  EXPECT_GE(static_cast<double>(model.aligned_own) / model.aligned_keys, 0.95);             // 229/236 = 0.970
   EXPECT_GE(model.speech_timed_repeats, 5);               // the held-out takes' 8 repeated keys
   EXPECT_GE(clean.aligned_rate, 0.84);                    // 202/236 = 0.856
   EXPECT_LE(Mean(clean.aligned_error_ms), 20.5);          // 18.7 ms
   EXPECT_LE(Mean(clean.aligned_error_reached_ms), 14.5);  // 13.1 ms
-  EXPECT_LE(*std::max_element(clean.aligned_error_ms.begin(), clean.aligned_error_ms.end()), 140.0);  // 124 ms
-  EXPECT_GE(filled.aligned_rate, 0.72);                                                               // 174/236 = 0.737
+  EXPECT_LE(Worst(clean.aligned_error_ms), 140.0);        // 124 ms
+  EXPECT_GE(filled.aligned_rate, 0.72);                   // 174/236 = 0.737
   EXPECT_GE(model.shape_reached.Accuracy(), 0.99);
   EXPECT_GE(model.placement_reached.Accuracy(), 0.97);
   EXPECT_GE(model.shape.Accuracy(), 0.89);
@@ -698,7 +705,7 @@ TEST(VirtualCuerKeys, TrainOnAThirdScoreTheRest) {
   // on the fingertips, 29.1 since anchor_keep_in_class, 26.9 since the last
   // movements are fitted alone)
   EXPECT_LE(Mean(filled.aligned_error_ms), 29.0);
-  EXPECT_LE(*std::max_element(filled.aligned_error_ms.begin(), filled.aligned_error_ms.end()), 150.0);  // 131 ms (290)
+  EXPECT_LE(Worst(filled.aligned_error_ms), 150.0);  // 131 ms (290)
 }
 
 // Another lab: the virtual cuer's second layout (other marker names and
@@ -754,14 +761,12 @@ TEST(VirtualCuerKeys, OtherLabLayoutAndShiftedTiming) {
   // anchor_keep_in_class (2026-12-05): clean 19.2 -> 18.0 ms (86/90), worst
   // 130 (unchanged); filled 22.6 -> 22.3 ms. Last movements fitted alone
   // (2026-12-05): clean 18.0 -> 17.2 ms (87/90), filled 22.3 -> 20.8 ms.
-  EXPECT_GE(clean.shape_reached.Accuracy(), 0.97);
-  EXPECT_GE(clean.placement_reached.Accuracy(), 0.95);
-  EXPECT_GE(static_cast<double>(clean.free_reached_matches) / clean.free_reached, 0.90);
+  ExpectReachedAccuracies(clean);
   EXPECT_GE(clean.aligned_rate, 0.86);                                             // 118/134 = 0.881
   EXPECT_LE(Mean(clean.aligned_error_ms), 19.0);                                   // 17.2 ms
   EXPECT_LE(Mean(clean.aligned_error_ms), Mean(clean.unanchored_error_ms) - 5.0);  // 17.2 vs 23.8 ms
   EXPECT_LE(Mean(filled.aligned_error_ms), 22.5);                                  // 20.8 ms
-  EXPECT_LE(*std::max_element(filled.aligned_error_ms.begin(), filled.aligned_error_ms.end()), 185.0);  // 167 ms
+  EXPECT_LE(Worst(filled.aligned_error_ms), 185.0);                                // 167 ms
   EXPECT_GE(filled.shape.Accuracy(), 0.62);
   EXPECT_GE(filled.placement.Accuracy(), 0.72);
 }
@@ -773,13 +778,13 @@ TEST(VirtualCuerKeys, OtherLabLayoutAndShiftedTiming) {
 // (noise, occlusions and dropouts as the defaults), trained on a third,
 // scored on the rest.
 TEST(VirtualCuerKeys, OtherFrameRatesAndHandSizes) {
-  // Bounds per case: the mean aligned key error on clean markers and on the
-  // spline/DCT-filled takes (ms).
+  // Bounds per case: the mean and the worst aligned key error on clean
+  // markers and on the spline/DCT-filled takes (ms).
   struct Case {
-    double rate, hand_scale, clean_ms, filled_ms;
+    double rate, hand_scale, clean_ms, filled_ms, clean_worst_ms, filled_worst_ms;
   };
-  for (const Case& c : {Case{60.0, 1.0, 25.0, 40.0}, Case{240.0, 1.0, 21.0, 28.0}, Case{120.0, 0.75, 20.0, 30.0},
-                        Case{120.0, 1.25, 21.0, 34.0}}) {
+  for (const Case& c : {Case{60.0, 1.0, 25.0, 40.0, 215.0, 225.0}, Case{240.0, 1.0, 21.0, 28.0, 175.0, 170.0},
+                        Case{120.0, 0.75, 20.0, 30.0, 155.0, 215.0}, Case{120.0, 1.25, 21.0, 34.0, 160.0, 190.0}}) {
     const double rate = c.rate;
     if (testing::kSanitized && (rate > 100.0 || c.hand_scale != 1.0)) continue;  // slow under the sanitizers
     const std::string label =
@@ -809,16 +814,21 @@ TEST(VirtualCuerKeys, OtherFrameRatesAndHandSizes) {
     // rate (46, 37 and 42 keys approached), and the dropouts are drawn in
     // frames (1-6), so at 60 Hz the gaps last twice as long as at 120 Hz:
     // the filled takes lose most there. A hand 0.75 times the size: clean
-    // 16.8 ms (90/97), filled 25.0 ms (85/97); 1.25 times: clean 18.1 ms
-    // (90/97), filled 29.4 ms (81/97).
-    EXPECT_GE(clean.shape_reached.Accuracy(), 0.97);
-    EXPECT_GE(clean.placement_reached.Accuracy(), 0.95);
-    EXPECT_GE(static_cast<double>(clean.free_reached_matches) / clean.free_reached, 0.90);
+    // 16.8 ms (90/97), filled 24.1 ms (85/97); 1.25 times: clean 18.1 ms
+    // (90/97), filled 28.7 ms (81/97); 60 Hz filled now 36.6 ms (below).
+    ExpectReachedAccuracies(clean);
     const auto within_40 = std::count_if(clean.aligned_error_reached_ms.begin(), clean.aligned_error_reached_ms.end(),
                                          [](double e) { return e <= 40.0; });
     EXPECT_GE(static_cast<double>(within_40) / static_cast<double>(clean.aligned_error_reached_ms.size()), 0.88);
     EXPECT_LE(Mean(clean.aligned_error_ms), c.clean_ms);
     EXPECT_LE(Mean(filled.aligned_error_ms), c.filled_ms);
+    // Worst keys (2026-12-05): 60 Hz clean 190 / filled 201 ms, 240 Hz 155 /
+    // 148, hand x0.75 136 / 190, x1.25 139 / 168. The filled takes' worst
+    // were 273 and 257 ms until a fit on the final return to rest counted as
+    // nearer a neighbour (AnchorToSpeech; the filled means 25.0 -> 24.1 and
+    // 29.4 -> 28.7 ms).
+    EXPECT_LE(Worst(clean.aligned_error_ms), c.clean_worst_ms);
+    EXPECT_LE(Worst(filled.aligned_error_ms), c.filled_worst_ms);
   }
 }
 
