@@ -167,17 +167,30 @@ TEST(SimulateJobOptionsCheck, RejectsEachBadRequestWithItsReason) {
   o.dropouts_per_s = 11;
   EXPECT_EQ(o.Check(), "simulate: --dropouts must be in [0, 10] per s");
   o.dropouts_per_s = 0.03;
-  o.hand_scale = 0.4;
-  EXPECT_EQ(o.Check(), "simulate: --hand-scale must be in [0.5, 2]");
-  o.hand_scale = 2.5;
-  EXPECT_EQ(o.Check(), "simulate: --hand-scale must be in [0.5, 2]");
-  o.hand_scale = 0.8;
-  EXPECT_EQ(o.Check(), "");
+  // A ranged option: both sides refused with the reason, a value inside
+  // accepted and passed on to the simulator.
+  auto ranged = [&o](auto& field, auto low, auto high, auto inside, const std::string& why) {
+    field = low;
+    EXPECT_EQ(o.Check(), why);
+    field = high;
+    EXPECT_EQ(o.Check(), why);
+    field = inside;
+    EXPECT_EQ(o.Check(), "");
+  };
+  ranged(o.hand_scale, 0.4, 2.5, 0.8, "simulate: --hand-scale must be in [0.5, 2]");
   EXPECT_EQ(ToSimulateOptions(o).hand_scale, 0.8);
   o.corpus = "signs";
   EXPECT_EQ(o.Check(), "simulate: --hand-scale applies to the virtual cuer, not signs");
   o.corpus = "sentences";
   o.hand_scale = 1.0;
+  ranged(o.speech_rate_wpm, 79, 451, 140, "simulate: --speech-rate must be in [80, 450] words per minute");
+  EXPECT_EQ(ToSimulateOptions(o).speech_rate_wpm, 140);
+  o.corpus = "shapes";
+  EXPECT_EQ(o.Check(), "simulate: --speech-rate applies to the sentences and demo corpora (cued speech), not shapes");
+  o.corpus = "signs";
+  EXPECT_EQ(o.Check(), "simulate: --speech-rate applies to the virtual cuer, not signs");
+  o.corpus = "sentences";
+  o.speech_rate_wpm = 80;
   o.phasing_file = (dir / "none.json").string();
   EXPECT_EQ(o.Check(), "simulate: --phasing " + o.phasing_file + ": no such file");
   std::ofstream(dir / "p.json") << "{}";

@@ -198,6 +198,10 @@ class SimulateCommand : public Command {
                      "The cuer's hand size relative to the layout's (0.5-2: every finger segment and marker offset "
                      "scaled)")
         ->capture_default_str();
+    sub_->add_option("--speech-rate", options_.speech_rate_wpm,
+                     "The cuer's speaking rate in words per minute (espeak-ng, 80-450; cuers slow down, and 80 is "
+                     "espeak-ng's slowest: a faster cuer leaves more keys only approached)")
+        ->capture_default_str();
     sub_->add_option("--phasing", options_.phasing_file,
                      "Phasing-model JSON (docs/virtual-cuer.md): gesture start/target laws instead of the defaults");
     sub_->add_option("--law", options_.law,

@@ -55,6 +55,7 @@ SimulateOptions ToSimulateOptions(const SimulateJobOptions& options) {
   o.sentences = options.texts;
   o.layout = options.layout;
   o.hand_scale = options.hand_scale;
+  o.speech_rate_wpm = options.speech_rate_wpm;
   return o;
 }
 
@@ -80,6 +81,7 @@ std::string SimulateJobOptions::Check() const {
     if (!texts.empty() || !sentences_file.empty() || !phasing_file.empty())
       return "simulate: --text, --sentences and --phasing apply to the virtual cuer, not signs";
     if (hand_scale != 1.0) return "simulate: --hand-scale applies to the virtual cuer, not signs";
+    if (speech_rate_wpm != 80) return "simulate: --speech-rate applies to the virtual cuer, not signs";
     std::error_code ec;
     const fs::path out = OutputPath(output);
     if (fs::exists(out, ec) && !fs::is_directory(out, ec)) return "simulate: -o " + output + " is a file, not a folder";
@@ -95,6 +97,8 @@ std::string SimulateJobOptions::Check() const {
     if (!texts.empty()) return "simulate: --text applies to the sentences and demo corpora, not " + corpus;
     if (!sentences_file.empty())
       return "simulate: --sentences applies to the sentences and demo corpora, not " + corpus;
+    if (speech_rate_wpm != 80)
+      return "simulate: --speech-rate applies to the sentences and demo corpora (cued speech), not " + corpus;
   }
   std::error_code ec;
   if (!sentences_file.empty() && !fs::is_regular_file(sentences_file, ec))
@@ -110,6 +114,8 @@ std::string SimulateJobOptions::Check() const {
   if (!(noise_mm >= 0.0 && noise_mm <= 50.0)) return "simulate: --noise must be in [0, 50] mm";
   if (!(dropouts_per_s >= 0.0 && dropouts_per_s <= 10.0)) return "simulate: --dropouts must be in [0, 10] per s";
   if (!(hand_scale >= 0.5 && hand_scale <= 2.0)) return "simulate: --hand-scale must be in [0.5, 2]";
+  if (speech_rate_wpm < 80 || speech_rate_wpm > 450)
+    return "simulate: --speech-rate must be in [80, 450] words per minute";
   if (std::string why = ToSimulateOptions(*this).Check(); !why.empty()) return "simulate: " + why;
   return "";
 }

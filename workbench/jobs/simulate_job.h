@@ -33,6 +33,10 @@ struct SimulateJobOptions {
   // Marker layout: "default" or "lab2" (datasets/virtual_cuer.h, SimulateOptions::layout).
   std::string layout = "default";
   double hand_scale = 1.0;  // the hand's size relative to the layout's (--hand-scale)
+  // The cuer's speaking rate (--speech-rate, words per minute, espeak-ng's
+  // 80-450; SimulateOptions::speech_rate_wpm): a faster cuer leaves more keys
+  // only approached.
+  int speech_rate_wpm = 80;
   // Phasing-model JSON (synth/phasing.h LoadPhasingModel) for the gesture
   // times; "" = the defaults. Read by Simulate (a bad file: ParseError naming it).
   std::string phasing_file;
