@@ -232,10 +232,12 @@ PhasingModel Synchronous() {
 // largest share of the moved placement changes the standard-error gate may
 // leave out.
 void Check(const PhasingModel& model, const char* label, int sentences, double bound_ms, bool check_v,
-           double rate_hz = 0.0, double max_undetermined = 0.6) {
+           double rate_hz = 0.0, double max_undetermined = 0.6, int speech_rate_wpm = 0,
+           double placement_onset_bound_ms = 0.0) {
   SimulateOptions so;
   so.audio = false;
   if (rate_hz > 0.0) so.rate_hz = rate_hz;
+  if (speech_rate_wpm > 0) so.speech_rate_wpm = speech_rate_wpm;
   so.phasing = model;
   VirtualCuer cuer(so);
   const std::vector<std::string> texts = ShippedSentences();
@@ -267,7 +269,9 @@ void Check(const PhasingModel& model, const char* label, int sentences, double b
         continue;
       }
       if (on.count < 10) continue;
-      EXPECT_LT(std::abs(on.mean_ms), bound_ms) << label << " " << KeyTypeLabel(type);
+      const double onset_bound_ms =
+          c == Component::kPlacement && placement_onset_bound_ms > 0.0 ? placement_onset_bound_ms : bound_ms;
+      EXPECT_LT(std::abs(on.mean_ms), onset_bound_ms) << label << " " << KeyTypeLabel(type);
       EXPECT_LT(std::abs(tg.mean_ms), bound_ms) << label << " " << KeyTypeLabel(type);
       EXPECT_LE(t.missed, (on.count + t.undetermined) / 10) << "changed components reported as still (at most 10 %)";
       // The gate leaves out at most 60 % of the moved placement changes (about
@@ -301,6 +305,29 @@ TEST(PhasingVirtualCuer, KinematicTimesMatchTheTruthSynchronousTiming) {
 // placement fits exceed the 8 ms gate at 60 Hz (75 of the 127 moved CV
 // placement changes left out, against 80 of 145 at 120 Hz), hence the wider
 // share allowed there. docs/analysis-phasing.md, "Other capture rates".
+// A faster cuer (espeak-ng at 110 and 140 words per minute instead of 80; the
+// gesture laws unchanged relative to the syllables, so the gestures overlap
+// more). Measured (30 sentences, 2026-12-05, this test alone), CV placement /
+// shape onset and target errors: 110 wpm +18.3 / -5.8, -2.2 / +1.4 ms; 140
+// wpm +35.8 / -0.7, +3.3 / +4.6 ms; 85 and 75 of the moved CV placement
+// changes undetermined (64 % and 72 %). The shape times and the placement
+// targets hold the 15 ms bound. The placement onsets do not, and are held to
+// looser bounds here (their sd is 47 and 86 ms over 47 and 29 keys, and run
+// after other tests in one process they read +5 to +17 and +36 to +41 ms: a
+// sub-millisecond change in espeak-ng's phone times flips a few fits): a
+// placement movement that starts long before the previous target (up to 250
+// ms before it at these rates; one started before the previous movement did)
+// lies before the fitted data (which start 120 ms before the previous target),
+// and the fit, confident (standard errors 2-8 ms, under the gate), puts its
+// onset 50-370 ms late. Reaching the data back further
+// (MovementFitOptions::onset_window_s 0.5) gave +13.1 and +23.4 ms; a
+// tighter gate (5 ms) +1.6 and +5.0 ms but 75-80 % undetermined. Left as
+// measured: docs/analysis-phasing.md, "Faster speech".
+TEST(PhasingVirtualCuer, KinematicTimesMatchTheTruthFasterSpeech) {
+  Check(PhasingModel(), "default at 110 wpm", csw::testing::kSanitized ? 3 : 30, kBoundMs, false, 0.0, 0.7, 110, 30.0);
+  if (!csw::testing::kSanitized) Check(PhasingModel(), "default at 140 wpm", 30, kBoundMs, false, 0.0, 0.8, 140, 55.0);
+}
+
 TEST(PhasingVirtualCuer, KinematicTimesMatchTheTruthOtherCaptureRates) {
   Check(PhasingModel(), "default at 60 Hz", csw::testing::kSanitized ? 3 : 30, kBoundMs, false, 60.0, 0.7);
   if (!csw::testing::kSanitized) Check(PhasingModel(), "default at 240 Hz", 30, kBoundMs, false, 240.0);
